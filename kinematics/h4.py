@@ -1,0 +1,245 @@
+"""H4 4-DOF parallel manipulator (seed 000: Falahian, Daniali, Varedi 2012).
+
+Frame and units
+---------------
+Base frame {A}: z vertical, the four actuators slide along z. Lengths in cm,
+angles in rad. Pose ``(x, y, z, theta)``: position of the end-effector point B
+(centre of the travelling plate) and its rotation about z.
+
+Geometry (seed 000 eq. 13-16, generalised from the example eq. 25)
+-------------------------------------------------------------------
+* Platform ball joints: ``B_i = (P_i cos(theta) + x, P_i sin(theta) + y + Q_i, z)``
+  with ``P = h * (-1, -1, 1, 1)`` and ``Q = d * (-1, 1, 1, -1)`` (eq. 13-14).
+  ``C_1 = B + Rot(theta) (-h, 0, 0)`` carries B_1, B_2; ``C_2 = B + Rot(theta) (h, 0, 0)``
+  carries B_3, B_4; the links C_i B_i = (0, Q_i, 0) only translate (eq. 29).
+* Actuator carriages: ``A_i = (a_i, b_i, q_i)``. The paper gives base points and
+  rod lengths only for its example (eq. 25). We generalise them so that the
+  example is reproduced exactly: at the home pose ``(0, 0, -Qz, 0)`` with
+  ``q = 0``, ``(a_i, b_i) = (P_i, Q_i) + Qz * o_i`` with horizontal offsets
+  ``o = (-1, -1), (-1, 1), (0, 1), (1, 0)``, and rod lengths
+  ``M = Qz * (sqrt 3, sqrt 3, sqrt 2, sqrt 2)``: every rod drops exactly Qz at home.
+  For h = d = 6, Qz = 42 this gives A_1 = (-48, -48, 0), ..., A_4 = (48, -6, 0) of eq. 25.
+* Actuator range ``0 <= q_i <= stroke`` (Delta q, default 100 cm, see
+  :attr:`H4.actuator_range`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from kinematics.algebra import (
+    newton_polish,
+    polynomial_roots,
+    tan_half_to_angle,
+    near_real,
+    trig_polynomial_in_tan_half,
+    unique_rows,
+    wrap_angle,
+)
+from kinematics.base import Mechanism, check_positive
+
+_SIGN_P = np.array([-1.0, -1.0, 1.0, 1.0])
+_SIGN_Q = np.array([-1.0, 1.0, 1.0, -1.0])
+_OFFSETS = np.array([[-1.0, -1.0], [-1.0, 1.0], [0.0, 1.0], [1.0, 0.0]])
+_ROD_FACTOR = np.array([np.sqrt(3.0), np.sqrt(3.0), np.sqrt(2.0), np.sqrt(2.0)])
+
+
+class H4(Mechanism):
+    """H4 robot with prismatic actuators along z (seed 000).
+
+    Parameters
+    ----------
+    d : float
+        Offset of the revolute joint from the ball joint (cm), > 0.
+    h : float
+        Offset of each ball joint from the centre of the travelling plate (cm), > 0.
+    Qz : float
+        Offset of {B} from {A} along z at the home pose; also sets the base
+        points and rod lengths (cm), > 0.
+    stroke : float
+        Actuator motion range Delta q (cm), > 0. Default 100 cm: Table 2's
+        d = 1.00008 cm at the bound d/Delta q = 0.01 implies Delta q = 100 cm.
+    """
+
+    name = "h4"
+    dof = 4
+    pose_names = ("x", "y", "z", "theta")
+    angular = (False, False, False, True)
+    length_unit = "cm"
+
+    def __init__(self, d: float, h: float, Qz: float, stroke: float = 100.0) -> None:
+        owner = "H4"
+        self.d = check_positive(owner, "d", d)
+        self.h = check_positive(owner, "h", h)
+        self.Qz = check_positive(owner, "Qz", Qz)
+        self.stroke = check_positive(owner, "stroke", stroke)
+        self._params = {"d": self.d, "h": self.h, "Qz": self.Qz, "stroke": self.stroke}
+        self.P = self.h * _SIGN_P
+        self.Q = self.d * _SIGN_Q
+        base = np.stack([self.P, self.Q], axis=1) + self.Qz * _OFFSETS
+        self.a = base[:, 0].copy()
+        self.b = base[:, 1].copy()
+        self.M = self.Qz * _ROD_FACTOR
+
+    # ---------------------------------------------------------- properties
+    @property
+    def characteristic_length(self) -> float:
+        """``h`` (cm): the lever arm of the rotation, |B C_i| (seed 000 Sec. 4.2)."""
+        return self.h
+
+    @property
+    def actuator_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """``0 <= q_i <= stroke`` (cm)."""
+        return np.zeros(4), np.full(4, self.stroke)
+
+    def base_points(self, q: np.ndarray) -> np.ndarray:
+        """Carriage points ``A_i = (a_i, b_i, q_i)`` (eq. 13), shape (N, 4, 3), cm."""
+        q = np.atleast_2d(q)
+        out = np.empty(q.shape + (3,))
+        out[..., 0] = self.a
+        out[..., 1] = self.b
+        out[..., 2] = q
+        return out
+
+    def platform_points(self, poses: np.ndarray) -> np.ndarray:
+        """Ball joints ``B_i`` (eq. 13), shape (N, 4, 3), cm, base frame."""
+        poses = self._check_poses(poses)
+        return self._platform_points(poses)
+
+    def _platform_points(self, poses: np.ndarray) -> np.ndarray:
+        x, y, z, th = poses.T
+        c, s = np.cos(th)[:, None], np.sin(th)[:, None]
+        out = np.empty((poses.shape[0], 4, 3))
+        out[..., 0] = self.P * c + x[:, None]
+        out[..., 1] = self.P * s + y[:, None] + self.Q
+        out[..., 2] = z[:, None]
+        return out
+
+    # ------------------------------------------------------------- kernels
+    def _horizontal(self, poses: np.ndarray):
+        """Horizontal components of A_i B_i and of B C_i, each (N, 4) (cm)."""
+        x, y, _, th = poses.T
+        c, s = np.cos(th)[:, None], np.sin(th)[:, None]
+        bc_x = self.P * c
+        bc_y = self.P * s
+        dx = bc_x + x[:, None] - self.a
+        dy = bc_y + y[:, None] + self.Q - self.b
+        return dx, dy, bc_x, bc_y
+
+    def _inverse(self, poses: np.ndarray) -> np.ndarray:
+        """Eq. 11-12 on the branch of eq. 26: ``q_i = z + sqrt(M_i^2 - dx_i^2 - dy_i^2)``.
+
+        (eq. 11 with ``d_i . z = z``; the '+' root puts the carriage above the
+        ball joint, as in the example.) NaN where the root is imaginary.
+        """
+        dx, dy, _, _ = self._horizontal(poses)
+        disc = self.M**2 - dx**2 - dy**2
+        return poses[:, 2:3] + np.sqrt(np.where(disc >= 0, disc, np.nan))
+
+    def _jacobian(self, poses: np.ndarray) -> np.ndarray:
+        """``J = J_q^-1 J_x`` of eq. 32-34, derived from eq. 31.
+
+        Row i: ``[L_x, L_y, L_z, (BC_i x L_i) . k] / L_z`` with ``L_i = B_i - A_i``.
+        The OCR text prints ``(A_iB_i x BC_i) . k``; with ``A_iB_i = B_i - A_i``
+        the velocity of B_i is ``v_B + theta_dot k x BC_i``, whose projection on
+        L_i is ``theta_dot (BC_i x L_i) . k``, hence the order used here
+        (verified against finite differences of :meth:`inverse`).
+        """
+        dx, dy, bc_x, bc_y = self._horizontal(poses)
+        disc = self.M**2 - dx**2 - dy**2
+        lz = -np.sqrt(np.where(disc >= 0, disc, np.nan))  # B_z - A_z <= 0
+        ang = bc_x * dy - bc_y * dx
+        jac = np.stack([dx, dy, lz, ang], axis=-1) / lz[..., None]
+        jac[lz == 0] = np.inf  # rod horizontal: J_q singular (workspace boundary)
+        return jac
+
+    # ------------------------------------------------------ forward kinematics
+    def _constraints(self, poses: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """``|B_i - A_i|^2 - M_i^2`` (eq. 15), shape (K, 4), cm^2."""
+        dx, dy, _, _ = self._horizontal(poses)
+        return dx**2 + dy**2 + (poses[:, 2:3] - q) ** 2 - self.M**2
+
+    def _constraints_jacobian(self, poses: np.ndarray, q: np.ndarray) -> np.ndarray:
+        dx, dy, bc_x, bc_y = self._horizontal(poses)
+        lz = poses[:, 2:3] - q
+        return 2.0 * np.stack([dx, dy, lz, bc_x * dy - bc_y * dx], axis=-1)
+
+    def _linear_position(self, theta: np.ndarray, q: np.ndarray):
+        """Cramer solution of the differences of eq. 16 for (x, y, z) at given theta.
+
+        Returns numerators N (K, 3) and denominator D (K,) with ``(x, y, z) = N / D``.
+        Rows used: chain 2 - chain 1, chain 4 - chain 3, chain 3 - chain 1.
+        """
+        c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
+        gx = self.P * c - self.a  # (K, 4)
+        gy = self.P * s + self.Q - self.b
+        k = gx**2 + gy**2 + q**2 - self.M**2
+        pairs = [(1, 0), (3, 2), (2, 0)]
+        mat = np.stack(
+            [np.stack([2 * (gx[:, j] - gx[:, i]), 2 * (gy[:, j] - gy[:, i]),
+                       np.full_like(theta, -2 * (q[j] - q[i]))], axis=-1) for j, i in pairs],
+            axis=1,
+        )
+        rhs = np.stack([-(k[:, j] - k[:, i]) for j, i in pairs], axis=1)
+        den = np.linalg.det(mat)
+        num = np.empty((theta.shape[0], 3))
+        for col in range(3):
+            m = mat.copy()
+            m[:, :, col] = rhs
+            num[:, col] = np.linalg.det(m)
+        return num, den, gx, gy, k
+
+    def forward_polynomial(self, q: np.ndarray) -> np.ndarray:
+        """Coefficients of the degree-8 polynomial in ``T = tan(theta/2)`` (eq. 24).
+
+        Eliminating (x, y, z) linearly from three differences of eq. 16 and
+        substituting into eq. 16 for chain 1 gives a trigonometric polynomial
+        of degree 4 in theta (eq. 22); eq. 23 turns it into eq. 24. The
+        coefficients are built numerically (FFT of samples), not by symbolic
+        expansion.
+
+        Parameters
+        ----------
+        q : array_like, shape (4,)
+            Actuator values (cm).
+
+        Returns
+        -------
+        ndarray, shape (9,)
+            Coefficients, highest degree first, scaled so the largest magnitude is 1.
+        """
+        q = self._check_actuators(q)
+
+        def residual(theta: np.ndarray) -> np.ndarray:
+            num, den, gx, gy, k = self._linear_position(theta, q)
+            return (
+                (num**2).sum(axis=1)
+                + 2 * den * (num[:, 0] * gx[:, 0] + num[:, 1] * gy[:, 0])
+                - 2 * den * num[:, 2] * q[0]
+                + den**2 * k[:, 0]
+            )
+
+        poly = trig_polynomial_in_tan_half(residual, 4)
+        return poly / np.max(np.abs(poly))
+
+    def _forward(self, q: np.ndarray) -> np.ndarray:
+        """All real poses for ``q``: real roots of eq. 24, then eq. 19-21, Newton-polished."""
+        poly = self.forward_polynomial(q)
+        theta = tan_half_to_angle(near_real(polynomial_roots(poly)))
+        if abs(poly[0]) < 1e-10:  # degree drop: theta = pi is a root (T infinite)
+            theta = np.append(theta, np.pi)
+        if theta.size == 0:
+            return np.empty((0, 4))
+        num, den, *_ = self._linear_position(theta, q)
+        start = np.column_stack([num / den[:, None], theta])
+        start = start[np.isfinite(start).all(axis=1)]
+        sols, res = newton_polish(
+            lambda p: self._constraints(p, q),
+            lambda p: self._constraints_jacobian(p, q),
+            start,
+        )
+        scale = self.M**2
+        ok = np.all(np.abs(res) <= 1e-9 * scale, axis=1)
+        sols = sols[ok]
+        sols[:, 3] = wrap_angle(sols[:, 3])
+        return unique_rows(sols)

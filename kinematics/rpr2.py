@@ -1,0 +1,102 @@
+"""Planar 2-RPR (RPRPR) parallel mechanism (seed 004: Abdullah, Yaacob, Basah 2014).
+
+Frame and units
+---------------
+Base frame with origin at the first base joint O_1 = (0, 0) and x axis through
+the second, O_2 = (b, 0). Lengths in mm. Pose ``(x, y)``: the end-effector point
+P where both legs meet. Actuators: leg lengths ``q_1, q_2`` in ``q_min..q_max``
+(paper: 6-9.6 mm, b = 5 mm).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from kinematics.base import Mechanism, check_positive, check_range
+
+
+class RPR2(Mechanism):
+    """Planar 2-RPR with actuated prismatic legs (seed 004).
+
+    Parameters
+    ----------
+    b : float
+        Distance between the two base joints (mm), > 0.
+    q_min, q_max : float
+        Leg length range (mm), ``0 < q_min < q_max``.
+    """
+
+    name = "rpr2"
+    dof = 2
+    pose_names = ("x", "y")
+    angular = (False, False)
+    length_unit = "mm"
+
+    def __init__(self, b: float, q_min: float, q_max: float) -> None:
+        owner = "RPR2"
+        self.b = check_positive(owner, "b", b)
+        self.q_min, self.q_max = check_range(owner, "q_min", q_min, "q_max", q_max)
+        self._params = {"b": self.b, "q_min": self.q_min, "q_max": self.q_max}
+        #: base joints O_1, O_2 (mm), shape (2, 2)
+        self.base = np.array([[0.0, 0.0], [self.b, 0.0]])
+
+    @property
+    def characteristic_length(self) -> float:
+        """``b`` (mm); unused: the 2-RPR has no angular pose variable."""
+        return self.b
+
+    @property
+    def actuator_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """``q_min <= q_i <= q_max`` (mm)."""
+        return np.full(2, self.q_min), np.full(2, self.q_max)
+
+    # ------------------------------------------------------------- kernels
+    def _inverse(self, poses: np.ndarray) -> np.ndarray:
+        """Algebraic model, eq. 1-2: ``q_1 = sqrt(x^2 + y^2)``, ``q_2 = sqrt((b - x)^2 + y^2)``."""
+        x, y = poses[:, 0], poses[:, 1]
+        return np.column_stack([np.sqrt(x**2 + y**2), np.sqrt((self.b - x) ** 2 + y**2)])
+
+    def inverse_dh(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """DH-derived model, eq. 5-11: leg lengths and passive base-joint angles.
+
+        Each leg is ``T^1 = Trans(O_i) Rot_z(theta_i) T_prismatic(q_i)`` (eq. 7), whose
+        position column is ``O_i + q_i (-sin theta_i, cos theta_i)`` (eq. 9). The
+        passive angle follows from eq. 11, ``theta_i = atan2(-(x - O_ix), y - O_iy)``,
+        and the leg length is the projection of ``P - O_i`` on the leg axis of
+        eq. 9 (equal to eq. 10's square root).
+
+        Parameters
+        ----------
+        poses : array_like, shape (N, 2)
+
+        Returns
+        -------
+        q : ndarray, shape (N, 2)
+            Leg lengths (mm).
+        theta : ndarray, shape (N, 2)
+            Passive base-joint angles (rad), measured as in eq. 11.
+        """
+        poses = self._check_poses(poses)
+        rel = poses[:, None, :] - self.base  # (N, 2, 2): P - O_i
+        theta = np.arctan2(-rel[..., 0], rel[..., 1])
+        q = -rel[..., 0] * np.sin(theta) + rel[..., 1] * np.cos(theta)
+        return q, theta
+
+    def _jacobian(self, poses: np.ndarray) -> np.ndarray:
+        """Rows ``(P - O_i)^T / q_i``: the derivative of eq. 1-2."""
+        rel = poses[:, None, :] - self.base
+        q = np.linalg.norm(rel, axis=-1)
+        jac = rel / q[..., None]
+        jac[q == 0] = np.inf
+        return jac
+
+    def _forward(self, q: np.ndarray) -> np.ndarray:
+        """Closed form eq. 3-4, both branches ``y = +-sqrt(q_1^2 - x^2)``."""
+        x = (q[0] ** 2 + self.b**2 - q[1] ** 2) / (2.0 * self.b)
+        y2 = q[0] ** 2 - x**2
+        if y2 < 0:
+            return np.empty((0, 2))
+        y = np.sqrt(y2)
+        if y == 0:
+            return np.array([[x, 0.0]])
+        return np.array([[x, y], [x, -y]])

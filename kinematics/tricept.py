@@ -1,0 +1,260 @@
+"""Tricept 3-DOF parallel manipulator (seed 001: Hosseini & Daniali 2011).
+
+Frame and units
+---------------
+Base frame {O(xyz)}, z normal to the base. Lengths in mm, angles in rad.
+Pose ``(c, psi, theta)``: ``c`` is the length of the central passive
+prismatic limb (the point ``c k`` on the z axis is the centre of its
+universal joint's rotation), ``psi`` and ``theta`` the universal-joint angles
+about x and y: ``R = R_y(theta) R_x(psi)`` (the matrix printed in eq. 1).
+
+Geometry (seed 001 eq. 1-2, derived from the geometry)
+------------------------------------------------------
+* Platform joints: ``P_i = R (p_i + d k) + c k`` with
+  ``p_1 = (a/sqrt3, 0, 0)``, ``p_2 = (-a/(2 sqrt3), a/2, 0)``, ``p_3 = (-a/(2 sqrt3), -a/2, 0)``
+  (eq. 1): an equilateral triangle of side ``a`` (circumradius ``a/sqrt3``).
+* Base joints: ``b_1 = (b/sqrt3, 0, 0)``, ``b_2 = (-b/(2 sqrt3), b/2, 0)``,
+  ``b_3 = (-b/(2 sqrt3), -b/2, 0)`` (eq. 2), side ``b``.
+* Leg lengths ``q_i = |P_i - b_i|``. Expanding gives, for leg 1,
+  ``q_1^2 = a^2/3 + b^2/3 + c^2 + d^2 - (2/3) a b C(theta) + 2 c d C(theta) C(psi)
+  - (2/sqrt3) b d C(psi) S(theta) - (2/sqrt3) a c S(theta)``; the OCR'd eq. 3
+  drops the last term, and eq. 4-5 carry further sign/index typos, so the code
+  computes ``|P_i - b_i|`` directly.
+* Limits (Table 1): actuators ``q_min..q_max`` (400-750 mm), joint cone angle
+  <= ``cone`` (60 deg) at base and platform joints.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from kinematics.algebra import (
+    matrix_polynomial_eigenvalues,
+    near_real,
+    newton_polish,
+    polynomial_roots,
+    sample_angles,
+    sylvester_matrix_polynomial,
+    tan_half_to_angle,
+    trig_coefficients,
+    trig_to_tan_half,
+    unique_rows,
+    wrap_angle,
+)
+from kinematics.base import Mechanism, check_positive, check_range
+
+_S3 = math.sqrt(3.0)
+
+
+def _triangle(side: float) -> np.ndarray:
+    """Vertices (3, 3) of the equilateral triangle of eq. 1-2, circumradius side/sqrt3."""
+    r = side / _S3
+    return np.array([[r, 0.0, 0.0], [-r / 2, side / 2, 0.0], [-r / 2, -side / 2, 0.0]])
+
+
+class Tricept(Mechanism):
+    """Tricept with three SPS legs and a central passive PU limb (seed 001).
+
+    Parameters
+    ----------
+    a : float
+        Side of the moving platform's joint triangle (mm), > 0.
+    b : float
+        Side of the base joint triangle (mm), > 0.
+    d : float
+        Offset of the platform from the universal-joint centre along the
+        platform normal (the "upper part of the passive link") (mm), > 0.
+    q_min, q_max : float
+        Actuator (leg length) range (mm), ``0 < q_min < q_max``; Table 1: 400-750.
+    cone : float
+        Largest joint cone angle (deg), in (0, 180); Table 1: 60.
+    """
+
+    name = "tricept"
+    dof = 3
+    pose_names = ("c", "psi", "theta")
+    angular = (False, True, True)
+    length_unit = "mm"
+
+    def __init__(self, a: float, b: float, d: float, q_min: float = 400.0,
+                 q_max: float = 750.0, cone: float = 60.0) -> None:
+        owner = "Tricept"
+        self.a = check_positive(owner, "a", a)
+        self.b = check_positive(owner, "b", b)
+        self.d = check_positive(owner, "d", d)
+        self.q_min, self.q_max = check_range(owner, "q_min", q_min, "q_max", q_max)
+        cone_v = check_positive(owner, "cone", cone)
+        if cone_v >= 180.0:
+            raise ValueError(f"Tricept: parameter 'cone' must be in (0, 180) degrees; got {cone!r}")
+        self.cone = cone_v
+        self._params = {"a": self.a, "b": self.b, "d": self.d, "q_min": self.q_min,
+                        "q_max": self.q_max, "cone": self.cone}
+        self.p = _triangle(self.a)
+        self.p[:, 2] = self.d  # p_i + d k, in the platform frame
+        self.base = _triangle(self.b)
+
+    @property
+    def characteristic_length(self) -> float:
+        """``sqrt(a^2/3 + d^2)`` (mm): distance from the U-joint centre to a platform joint.
+
+        This is the moment arm ``|R (a_i + d)|`` of eq. 31, so the angular
+        columns of eq. 37 divided by it are the leg-speed per unit speed of
+        the platform joints.
+        """
+        return math.sqrt(self.a**2 / 3.0 + self.d**2)
+
+    @property
+    def actuator_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """``q_min <= q_i <= q_max`` (mm)."""
+        return np.full(3, self.q_min), np.full(3, self.q_max)
+
+    @property
+    def cone_limit(self) -> float:
+        """Largest joint cone angle (rad)."""
+        return math.radians(self.cone)
+
+    # ----------------------------------------------------------- geometry
+    @staticmethod
+    def _rotation(psi: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """``R = R_y(theta) R_x(psi)`` (eq. 1), shape (N, 3, 3)."""
+        cp, sp, ct, st = np.cos(psi), np.sin(psi), np.cos(theta), np.sin(theta)
+        zero = np.zeros_like(psi)
+        return np.stack([
+            np.stack([ct, sp * st, cp * st], axis=-1),
+            np.stack([zero, cp, -sp], axis=-1),
+            np.stack([-st, ct * sp, ct * cp], axis=-1),
+        ], axis=-2)
+
+    def _arms(self, poses: np.ndarray) -> np.ndarray:
+        """``r_i = R (p_i + d k)`` (N, 3, 3), mm, base-frame orientation."""
+        rot = self._rotation(poses[:, 1], poses[:, 2])
+        return np.einsum("nij,kj->nki", rot, self.p)
+
+    def platform_points(self, poses: np.ndarray) -> np.ndarray:
+        """Platform joints ``P_i`` (eq. 1), shape (N, 3, 3), mm, base frame."""
+        poses = self._check_poses(poses)
+        pts = self._arms(poses)
+        pts[..., 2] += poses[:, 0:1]
+        return pts
+
+    def cone_angles(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Joint cone angles (rad) of the legs (seed 001 Sec. 4.2, Table 1).
+
+        The base joint's angle is between the leg and the base normal ``k``;
+        the platform joint's angle is between the leg and the platform normal
+        ``R k``.
+
+        Returns
+        -------
+        base, platform : ndarray, each shape (N, 3)
+        """
+        poses = self._check_poses(poses)
+        legs = self.platform_points(poses) - self.base
+        unit = legs / np.linalg.norm(legs, axis=-1, keepdims=True)
+        normal = self._rotation(poses[:, 1], poses[:, 2])[:, :, 2]
+        base = np.arccos(np.clip(unit[..., 2], -1.0, 1.0))
+        plat = np.arccos(np.clip(np.einsum("nki,ni->nk", unit, normal), -1.0, 1.0))
+        return base, plat
+
+    # ------------------------------------------------------------- kernels
+    def _inverse(self, poses: np.ndarray) -> np.ndarray:
+        """Leg lengths ``q_i = |R (p_i + d k) + c k - b_i|`` (eq. 1-5, from the geometry)."""
+        legs = self._arms(poses) - self.base
+        legs[..., 2] += poses[:, 0:1]
+        return np.linalg.norm(legs, axis=-1)
+
+    def _jacobian(self, poses: np.ndarray) -> np.ndarray:
+        """``J`` with ``q_dot = J (c_dot, psi_dot, theta_dot)`` (eq. 31-36).
+
+        Eq. 31: ``q_dot_i = n_i . (c_dot k + omega x r_i)`` with ``n_i`` the leg's
+        unit vector and ``r_i = R (a_i + d)``. For ``R = R_y(theta) R_x(psi)`` the
+        angular velocity is ``omega = psi_dot R_y(theta) i + theta_dot j``, so the
+        row is ``[n_z, (r x n) . (cos theta, 0, -sin theta), (r x n)_y]``. Eq. 32-33
+        print ``(R(a_i + d) x n_i)_x`` for the psi column, which holds only at
+        theta = 0. This ``J`` is the paper's ``J_x`` (eq. 33, ``J_q = I``), i.e. the
+        inverse of its eq. 36 ``J``.
+        """
+        arms = self._arms(poses)
+        legs = arms - self.base
+        legs[..., 2] += poses[:, 0:1]
+        unit = legs / np.linalg.norm(legs, axis=-1, keepdims=True)
+        moment = np.cross(arms, unit)
+        th = poses[:, 2:3]
+        psi_col = moment[..., 0] * np.cos(th) - moment[..., 2] * np.sin(th)
+        return np.stack([unit[..., 2], psi_col, moment[..., 1]], axis=-1)
+
+    # --------------------------------------------------- forward kinematics
+    def _constraints(self, poses: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """``|P_i - b_i|^2 - q_i^2`` (mm^2), shape (K, 3)."""
+        return self._inverse(poses) ** 2 - q**2
+
+    def _constraints_jacobian(self, poses: np.ndarray, q: np.ndarray) -> np.ndarray:
+        return 2.0 * self._inverse(poses)[..., None] * self._jacobian(poses)
+
+    def _eliminants(self, psi: np.ndarray, theta: np.ndarray, q: np.ndarray, scale: float):
+        """``G_j = Res_c(E_1, E_1 - E_j)`` for j = 2, 3 on a (psi, theta) grid.
+
+        ``E_i = c^2 + 2 c u_i + w_i - q_i^2`` with ``u_i = (r_i)_z`` and
+        ``w_i = |r_i - b_i|^2`` (leg i squared, lengths divided by ``scale``).
+        ``E_1 - E_j = m c + n`` is linear in c, so
+        ``Res_c = n^2 - 2 u_1 n m + (w_1 - q_1^2) m^2``: a trig polynomial of
+        degree 3 in each angle.
+        """
+        poses = np.column_stack([np.zeros(psi.size), psi.ravel(), theta.ravel()])
+        arms = self._arms(poses) / scale
+        u = arms[..., 2]
+        w = ((arms - self.base / scale) ** 2).sum(axis=-1)
+        qs = (q / scale) ** 2
+        out = []
+        for j in (1, 2):
+            m = 2.0 * (u[:, 0] - u[:, j])
+            n = (w[:, 0] - w[:, j]) - (qs[0] - qs[j])
+            out.append((n**2 - 2 * u[:, 0] * n * m + (w[:, 0] - qs[0]) * m**2).reshape(psi.shape))
+        return out
+
+    def _forward(self, q: np.ndarray) -> np.ndarray:
+        """All real poses: Sylvester elimination of psi, QZ for theta, Newton polish.
+
+        Replaces the route of eq. 6-27 (whose coefficients eq. 13-21 carry
+        typos and keep ``c`` inside M_i, N_i, L_i although it is unknown): we
+        eliminate c exactly (``G_2``, ``G_3`` above), then psi with a Sylvester
+        matrix in ``t_2 = tan(psi/2)``, and solve the resulting polynomial
+        eigenvalue problem in ``t_1 = tan(theta/2)`` (eq. 6-11). Solutions come in
+        mirror pairs through the base plane (c and -c).
+        """
+        scale = max(self.a, self.b, self.d, float(np.max(q)))
+        ang = sample_angles(3)
+        psi, theta = np.meshgrid(ang, ang, indexing="ij")
+        polys = []
+        for g in self._eliminants(psi, theta, q, scale):
+            coef = trig_coefficients(trig_coefficients(g, 3, axis=0), 3, axis=1)
+            poly = np.real(trig_to_tan_half(trig_to_tan_half(coef, axis=0), axis=1))
+            polys.append(poly.T)  # index [theta power, psi power]
+        f, g = polys
+        f = f / np.max(np.abs(f))
+        g = g / np.max(np.abs(g))
+        t1 = near_real(matrix_polynomial_eigenvalues(sylvester_matrix_polynomial(f, g)), 1e-3)
+        starts = []
+        for t in t1:
+            coeffs_psi = np.array([np.polyval(f[::-1, j], t) for j in range(f.shape[1])])
+            for t2 in near_real(polynomial_roots(coeffs_psi[::-1]), 1e-3):
+                th, ps = tan_half_to_angle(t), tan_half_to_angle(t2)
+                arms = self._arms(np.array([[0.0, ps, th]]))[0]
+                u1 = arms[0, 2]
+                w1 = ((arms[0] - self.base[0]) ** 2).sum()
+                disc = u1**2 - w1 + q[0] ** 2
+                root = math.sqrt(max(disc, 0.0))
+                starts.extend([[-u1 + root, ps, th], [-u1 - root, ps, th]])
+        if not starts:
+            return np.empty((0, 3))
+        sols, res = newton_polish(
+            lambda p: self._constraints(p, q),
+            lambda p: self._constraints_jacobian(p, q),
+            np.array(starts),
+        )
+        ok = np.all(np.abs(res) <= 1e-9 * q**2, axis=1)
+        sols = sols[ok]
+        sols[:, 1:] = wrap_angle(sols[:, 1:])
+        return unique_rows(sols)

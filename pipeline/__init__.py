@@ -1,0 +1,1 @@
+"""Workflow pipeline: sample -> evaluate -> optimise -> aggregate -> plot."""
