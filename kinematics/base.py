@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
+from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
@@ -177,6 +178,60 @@ class Mechanism(ABC):
     def actuator_range(self) -> tuple[np.ndarray, np.ndarray]:
         """Lower and upper actuator limits, each shape (dof,), in :attr:`length_unit`."""
 
+    # ------------------------------------------------ workspace description
+    #: design variables (name, lower, upper, unit) for :meth:`from_design`
+    design_variables: ClassVar[tuple["DesignVariable", ...]] = ()
+
+    @classmethod
+    def from_design(cls, design: np.ndarray, **fixed: object) -> "Mechanism":
+        """Build the mechanism of a design vector (see :attr:`design_variables`).
+
+        The default maps each design variable to the constructor parameter
+        of the same name; ``fixed`` supplies the other parameters.
+        """
+        values = {v.name: float(x) for v, x in zip(cls.design_variables, np.ravel(design))}
+        return cls(**fixed, **values)
+
+    @property
+    @abstractmethod
+    def default_orientation(self) -> tuple[float, float]:
+        """Default range (rad) of every angular pose variable in the workspace."""
+
+    @abstractmethod
+    def pose_bounds(self, orientation: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+        """Box (lower, upper), each shape (dof,), that contains the whole workspace.
+
+        Derived from the geometry and the actuator range; angular variables
+        take ``orientation`` (rad).
+        """
+
+    @abstractmethod
+    def reference_volume(self, orientation: tuple[float, float]) -> float:
+        """Robot size ``V*`` for the space utility ratio ``V/V*`` (seed 000 Sec. 4.3).
+
+        Same unit as the workspace volume over the full pose space; the
+        angular measure is the orientation range's width (or 1 when the
+        range is a single value).
+        """
+
+    def invariant_axis_interval(self, poses: np.ndarray
+                                ) -> tuple[int, np.ndarray, np.ndarray] | None:
+        """An axis along which the workspace can be integrated exactly, if any.
+
+        Some mechanisms have a translational pose variable along which the
+        Jacobian, its conditioning and the joint limits do not change (H4: z,
+        because every carriage slides along z). For such a mechanism this
+        returns ``(axis, lower, upper)``: the variable's column index and, for
+        each pose (N,) (whose value in that column is ignored), the interval
+        where every actuator stays within its range (``lower > upper`` when
+        none). ``None`` (the default) means no such axis.
+        """
+        return None
+
+    def within_joint_limits(self, poses: np.ndarray) -> np.ndarray:
+        """Passive-joint limits (N,) bool; True for mechanisms without such limits."""
+        return np.ones(np.asarray(poses).shape[0], dtype=bool)
+
     def params(self) -> dict[str, object]:
         """Constructor keyword arguments that rebuild this mechanism."""
         return dict(self._params)
@@ -196,6 +251,35 @@ class Mechanism(ABC):
     def _forward(self, q: np.ndarray) -> np.ndarray: ...
 
     _params: dict[str, object]
+
+
+@dataclass(frozen=True)
+class DesignVariable:
+    """One design variable: name, bounds and unit (documentation only)."""
+
+    name: str
+    lower: float
+    upper: float
+    unit: str = ""
+
+
+def cosine_range(lo: float, hi: float, phase: np.ndarray | float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Exact min and max of ``cos(angle + phase)`` for ``angle`` in [lo, hi] (rad)."""
+    phase = np.asarray(phase, dtype=float)
+    ends = np.cos(np.stack([lo + phase, hi + phase]))
+    cmin, cmax = ends.min(axis=0), ends.max(axis=0)
+    # an interior extremum where angle + phase crosses a multiple of pi
+    k_max = np.ceil((lo + phase) / (2 * np.pi))
+    has_max = 2 * np.pi * k_max <= hi + phase
+    k_min = np.ceil((lo + phase - np.pi) / (2 * np.pi))
+    has_min = 2 * np.pi * k_min + np.pi <= hi + phase
+    return np.where(has_min, -1.0, cmin), np.where(has_max, 1.0, cmax)
+
+
+def orientation_measure(orientation: tuple[float, float], n_angles: int) -> float:
+    """Measure (rad^n) of an orientation box; 1 when the range is one value."""
+    width = float(orientation[1]) - float(orientation[0])
+    return width**n_angles if width > 0 else 1.0
 
 
 # ---------------------------------------------------------------- validation

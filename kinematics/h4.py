@@ -36,7 +36,14 @@ from kinematics.algebra import (
     unique_rows,
     wrap_angle,
 )
-from kinematics.base import Mechanism, check_positive
+from kinematics.rows import row_all, row_max, row_min
+from kinematics.base import (
+    DesignVariable,
+    Mechanism,
+    check_positive,
+    cosine_range,
+    orientation_measure,
+)
 
 _SIGN_P = np.array([-1.0, -1.0, 1.0, 1.0])
 _SIGN_Q = np.array([-1.0, 1.0, 1.0, -1.0])
@@ -81,6 +88,20 @@ class H4(Mechanism):
         self.b = base[:, 1].copy()
         self.M = self.Qz * _ROD_FACTOR
 
+    design_variables = (
+        DesignVariable("d_ratio", 0.01, 0.15, "d / stroke"),
+        DesignVariable("h_ratio", 0.01, 0.15, "h / stroke"),
+        DesignVariable("Qz_ratio", 0.35, 0.55, "Qz / stroke"),
+    )
+
+    @classmethod
+    def from_design(cls, design: np.ndarray, **fixed: object) -> "H4":
+        """H4 of the scaled design vector ``(d, h, Qz) / stroke`` of seed 000 Sec. 4.4."""
+        stroke = float(fixed.pop("stroke", 100.0))
+        d_ratio, h_ratio, qz_ratio = (float(v) for v in np.ravel(design))
+        return cls(d=d_ratio * stroke, h=h_ratio * stroke, Qz=qz_ratio * stroke,
+                   stroke=stroke, **fixed)
+
     # ---------------------------------------------------------- properties
     @property
     def characteristic_length(self) -> float:
@@ -91,6 +112,59 @@ class H4(Mechanism):
     def actuator_range(self) -> tuple[np.ndarray, np.ndarray]:
         """``0 <= q_i <= stroke`` (cm)."""
         return np.zeros(4), np.full(4, self.stroke)
+
+    @property
+    def default_orientation(self) -> tuple[float, float]:
+        """theta in [-pi/4, pi/4] rad: see :func:`kinematics.workspace.evaluate` notes."""
+        return (-np.pi / 4, np.pi / 4)
+
+    def pose_bounds(self, orientation: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+        """Box of the workspace from the rods' reach (cm, rad).
+
+        Each ball joint is within ``M_i`` of its carriage horizontally, so
+        ``x + P_i cos(theta)`` is within ``a_i +- M_i`` (likewise y); the carriage
+        moves in ``[0, stroke]`` and a rod drops at most ``M_i``, so
+        ``-min(M) <= z <= stroke``.
+        """
+        lo, hi = float(orientation[0]), float(orientation[1])
+        cmin, cmax = cosine_range(lo, hi)
+        smin, smax = cosine_range(lo, hi, -np.pi / 2)
+        px = np.stack([self.P * cmin, self.P * cmax])  # extremes of P_i cos(theta)
+        py = np.stack([self.P * smin, self.P * smax])
+        x_lo = np.max(self.a - self.M - px.max(axis=0))
+        x_hi = np.min(self.a + self.M - px.min(axis=0))
+        y_lo = np.max(self.b - self.Q - self.M - py.max(axis=0))
+        y_hi = np.min(self.b - self.Q + self.M - py.min(axis=0))
+        return (np.array([x_lo, y_lo, -self.M.min(), lo]),
+                np.array([x_hi, y_hi, self.stroke, hi]))
+
+    def reference_volume(self, orientation: tuple[float, float]) -> float:
+        """``V* = area(base) * z reach * theta range`` (cm^3 rad), seed 000 Sec. 4.3.
+
+        Base area: the quadrilateral of the carriage axes (a_i, b_i); z reach:
+        ``stroke + min(M)``, the height of :meth:`pose_bounds`. The paper's V* has
+        no angular factor; multiplying by the theta range makes ``V/V*``
+        dimensionless (the fraction of a prism of base x reach x rotation).
+        """
+        pts = np.column_stack([self.a, self.b])
+        centre = pts.mean(axis=0)
+        order = np.argsort(np.arctan2(*(pts - centre).T[::-1]))
+        x, y = pts[order].T
+        area = 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+        return area * (self.stroke + self.M.min()) * orientation_measure(orientation, 1)
+
+    def invariant_axis_interval(self, poses: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
+        """z: ``q_i = z + s_i(x, y, theta)`` with ``s_i = sqrt(M_i^2 - dx_i^2 - dy_i^2)``
+        (eq. 11) and a Jacobian independent of z (eq. 33), so the actuator range
+        ``0 <= q_i <= stroke`` gives ``max_i(-s_i) <= z <= min_i(stroke - s_i)`` (cm)."""
+        poses = self._check_poses(poses)
+        dx, dy, _, _ = self._horizontal(poses)
+        with np.errstate(invalid="ignore"):
+            drop = np.sqrt(self.M**2 - dx**2 - dy**2)
+        lower = -row_min(drop)
+        upper = self.stroke - row_max(drop)
+        reachable = row_all(np.isfinite(drop))
+        return 2, np.where(reachable, lower, np.inf), np.where(reachable, upper, -np.inf)
 
     def base_points(self, q: np.ndarray) -> np.ndarray:
         """Carriage points ``A_i = (a_i, b_i, q_i)`` (eq. 13), shape (N, 4, 3), cm."""

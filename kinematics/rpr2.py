@@ -10,9 +10,12 @@ P where both legs meet. Actuators: leg lengths ``q_1, q_2`` in ``q_min..q_max``
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from kinematics.base import Mechanism, check_positive, check_range
+from kinematics.annuli import two_annuli_area
+from kinematics.base import DesignVariable, Mechanism, check_positive, check_range
 
 
 class RPR2(Mechanism):
@@ -39,6 +42,36 @@ class RPR2(Mechanism):
         self._params = {"b": self.b, "q_min": self.q_min, "q_max": self.q_max}
         #: base joints O_1, O_2 (mm), shape (2, 2)
         self.base = np.array([[0.0, 0.0], [self.b, 0.0]])
+
+    design_variables = (
+        DesignVariable("b", 1.0, 10.0, "mm"),
+        DesignVariable("q_min", 3.0, 9.0, "mm"),
+    )
+
+    @classmethod
+    def from_design(cls, design: np.ndarray, **fixed: object) -> "RPR2":
+        """``(b, q_min)`` with ``q_max`` fixed (default 9.6 mm, the paper's)."""
+        b, q_min = (float(v) for v in np.ravel(design))
+        return cls(b=b, q_min=q_min, q_max=float(fixed.pop("q_max", 9.6)), **fixed)
+
+    @property
+    def default_orientation(self) -> tuple[float, float]:
+        """No angular pose variable; (0, 0) is a placeholder."""
+        return (0.0, 0.0)
+
+    def pose_bounds(self, orientation: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+        """Box of the workspace: P within ``q_max`` of both base joints (mm)."""
+        return (np.array([self.b - self.q_max, -self.q_max]),
+                np.array([self.q_max, self.q_max]))
+
+    def reference_volume(self, orientation: tuple[float, float]) -> float:
+        """``V* = pi (q_max^2 - q_min^2)`` (mm^2): one leg's annulus, so ``V/V* <= 1``."""
+        return math.pi * (self.q_max**2 - self.q_min**2)
+
+    def exact_area(self) -> float:
+        """Exact workspace area (mm^2), no dexterity limit: two annuli ``q_min..q_max``
+        around O_1 and O_2, by the closed-form lens areas (:func:`~kinematics.annuli.two_annuli_area`)."""
+        return two_annuli_area(self.b, self.q_min, self.q_max)
 
     @property
     def characteristic_length(self) -> float:

@@ -49,7 +49,14 @@ from kinematics.algebra import (
     unique_rows,
     wrap_angle,
 )
-from kinematics.base import Mechanism, check_range
+from kinematics.annuli import annuli_intersection_area
+from kinematics.base import (
+    DesignVariable,
+    Mechanism,
+    check_range,
+    cosine_range,
+    orientation_measure,
+)
 
 
 def _points(owner: str, name: str, value) -> np.ndarray:
@@ -96,6 +103,57 @@ class RPR3(Mechanism):
         self.rho_min, self.rho_max = check_range(owner, "rho_min", rho_min, "rho_max", rho_max)
         self._params = {"base": self.base.tolist(), "platform": self.platform.tolist(),
                         "rho_min": self.rho_min, "rho_max": self.rho_max}
+
+    design_variables = (
+        DesignVariable("base_side", 100.0, 300.0, "mm"),
+        DesignVariable("platform_side", 20.0, 100.0, "mm"),
+    )
+
+    @classmethod
+    def from_design(cls, design: np.ndarray, **fixed: object) -> "RPR3":
+        """The thesis' shapes scaled: base A = (0,0), (s_b,0), (0,s_b) (thesis s_b = 200)
+        and platform B' = (0,0), (s_p,0), (0.8 s_p, 0.8 s_p) (thesis s_p = 50)."""
+        side_b, side_p = (float(v) for v in np.ravel(design))
+        base = [[0.0, 0.0], [side_b, 0.0], [0.0, side_b]]
+        platform = [[0.0, 0.0], [side_p, 0.0], [0.8 * side_p, 0.8 * side_p]]
+        return cls(base=base, platform=platform, **fixed)
+
+    @property
+    def default_orientation(self) -> tuple[float, float]:
+        """phi in [15, 60] deg: the span of the thesis' Fig. 8-11."""
+        return (np.pi / 12, np.pi / 3)
+
+    def pose_bounds(self, orientation: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+        """Box of the workspace: ``B_i = (x, y) + Rot(phi) B'_i`` within ``rho_max`` of ``A_i``."""
+        lo, hi = float(orientation[0]), float(orientation[1])
+        radius = np.hypot(*self.platform.T)
+        phase = np.arctan2(self.platform[:, 1], self.platform[:, 0])
+        cmin, cmax = cosine_range(lo, hi, phase)
+        smin, smax = cosine_range(lo, hi, phase - np.pi / 2)
+        x_lo = np.max(self.base[:, 0] - self.rho_max - radius * cmax)
+        x_hi = np.min(self.base[:, 0] + self.rho_max - radius * cmin)
+        y_lo = np.max(self.base[:, 1] - self.rho_max - radius * smax)
+        y_hi = np.min(self.base[:, 1] + self.rho_max - radius * smin)
+        return np.array([x_lo, y_lo, lo]), np.array([x_hi, y_hi, hi])
+
+    def reference_volume(self, orientation: tuple[float, float]) -> float:
+        """``V* = pi (rho_max^2 - rho_min^2) * phi range`` (mm^2 rad).
+
+        One leg's annulus: the constant-orientation workspace is an
+        intersection of three such annuli, so ``V/V* <= 1``.
+        """
+        return math.pi * (self.rho_max**2 - self.rho_min**2) * orientation_measure(orientation, 1)
+
+    def annulus_centres(self, phi: float) -> np.ndarray:
+        """Centres (3, 2) of the annuli confining B_1 at orientation ``phi`` (rad): ``A_i - Rot(phi) B'_i``.
+
+        (The thesis' eq. 12-14 and its Fig. 8-11.)
+        """
+        return self.base - self._rotated_platform(np.array([float(phi)]))[0]
+
+    def exact_area(self, phi: float) -> float:
+        """Exact area (mm^2) of the constant-orientation workspace at ``phi`` (rad), no dexterity limit."""
+        return annuli_intersection_area(self.annulus_centres(phi), self.rho_min, self.rho_max)
 
     @property
     def characteristic_length(self) -> float:

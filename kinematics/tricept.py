@@ -43,7 +43,13 @@ from kinematics.algebra import (
     unique_rows,
     wrap_angle,
 )
-from kinematics.base import Mechanism, check_positive, check_range
+from kinematics.base import (
+    DesignVariable,
+    Mechanism,
+    check_positive,
+    check_range,
+    orientation_measure,
+)
 
 _S3 = math.sqrt(3.0)
 
@@ -94,6 +100,46 @@ class Tricept(Mechanism):
         self.p = _triangle(self.a)
         self.p[:, 2] = self.d  # p_i + d k, in the platform frame
         self.base = _triangle(self.b)
+
+    design_variables = (
+        DesignVariable("a", 200.0, 300.0, "mm"),
+        DesignVariable("b", 300.0, 500.0, "mm"),
+        DesignVariable("d", 20.0, 200.0, "mm"),
+    )
+
+    @property
+    def default_orientation(self) -> tuple[float, float]:
+        """psi, theta in [-pi/2, pi/2] rad: a universal joint's usable range;
+        the cone limit (Table 1) bounds the workspace well inside it."""
+        return (-np.pi / 2, np.pi / 2)
+
+    def pose_bounds(self, orientation: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+        """Box of the (upper, c > 0) workspace (mm, rad).
+
+        A platform joint lies within ``R = sqrt(a^2/3 + d^2)`` of ``c k`` and a base
+        joint at ``b/sqrt3`` from the axis, so a leg of length ``>= q_min`` needs a
+        height ``>= sqrt(q_min^2 - (b/sqrt3 + R)^2)`` and one ``<= q_max`` allows at
+        most ``q_max``; c is within R of the joint height.
+        """
+        reach = self.characteristic_length
+        floor = math.sqrt(max(0.0, self.q_min**2 - (self.b / _S3 + reach) ** 2))
+        lo, hi = float(orientation[0]), float(orientation[1])
+        return (np.array([max(0.0, floor - reach), lo, lo]),
+                np.array([self.q_max + reach, hi, hi]))
+
+    def reference_volume(self, orientation: tuple[float, float]) -> float:
+        """``V* = (q_max - q_min) * (psi range) * (theta range)`` (mm rad^2).
+
+        The Tricept analogue of seed 000's "base area x z reach": its pose has
+        one length, whose reach is the actuator stroke.
+        """
+        return (self.q_max - self.q_min) * orientation_measure(orientation, 2)
+
+    def within_joint_limits(self, poses: np.ndarray) -> np.ndarray:
+        """Every base and platform joint cone angle <= ``cone`` (Table 1)."""
+        base, plat = self.cone_angles(poses)
+        limit = self.cone_limit
+        return np.all(base <= limit, axis=1) & np.all(plat <= limit, axis=1)
 
     @property
     def characteristic_length(self) -> float:

@@ -166,3 +166,17 @@ def test_length_changes_inverse_condition_only_for_angular_mechanisms():
 def test_bad_parameters_name_the_field(name, params, field):
     with pytest.raises(ValueError, match=field):
         get_mechanism(name, **params)
+
+
+def test_fast_inverse_condition_matches_svd():
+    from kinematics.conditioning import inverse_condition_number, inverse_condition_svd
+
+    rng = np.random.default_rng(4)
+    for n in (2, 3, 4):
+        u, _, vt = np.linalg.svd(rng.normal(size=(3000, n, n)))
+        s = np.sort(10 ** rng.uniform(-5, 0, size=(3000, n)), axis=1)[:, ::-1]
+        jac = np.einsum("nij,nj,njk->nik", u, s, vt) * 10 ** rng.uniform(-3, 3, size=(3000, 1, 1))
+        fast, ref = inverse_condition_number(jac), inverse_condition_svd(jac)
+        assert np.max(np.abs(fast - ref)) < 1e-3
+        big = ref > 1e-3
+        assert np.max(np.abs(fast[big] - ref[big]) / ref[big]) < 1e-4
