@@ -105,6 +105,19 @@ def near_real(roots: np.ndarray, rel_tol: float = 1e-4) -> np.ndarray:
     return np.real(roots[keep])
 
 
+def real_tan_half_angles(coefs_high_first: np.ndarray) -> np.ndarray:
+    """Angles (rad) of the near-real roots of a polynomial in ``T = tan(angle/2)``.
+
+    A vanishing leading coefficient means the degree dropped: ``T`` infinite,
+    i.e. ``angle = pi``, is then a root too.
+    """
+    coefs = np.asarray(coefs_high_first, dtype=float)
+    angles = tan_half_to_angle(near_real(polynomial_roots(coefs)))
+    if abs(coefs[0]) < 1e-10 * np.max(np.abs(coefs)):
+        angles = np.append(angles, np.pi)
+    return angles
+
+
 def polynomial_roots(coefs_high_first: np.ndarray) -> np.ndarray:
     """All complex roots of a polynomial, dropping leading coefficients that are ~0."""
     c = np.asarray(coefs_high_first, dtype=float)

@@ -29,6 +29,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from kinematics.algebra import newton_polish, unique_rows, wrap_angle
 from kinematics.conditioning import inverse_condition_number
 
 
@@ -239,6 +240,32 @@ class Mechanism(ABC):
     def __repr__(self) -> str:
         args = ", ".join(f"{k}={v!r}" for k, v in self._params.items())
         return f"{type(self).__name__}({args})"
+
+    # ------------------------------------------------- forward-kinematics aids
+    def _constraints(self, poses: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """Residuals (K, dof) of the closure equations; zero at a solution for ``q``.
+
+        Default for leg-length actuators: ``|leg_i|^2 - q_i^2`` (length^2).
+        """
+        return self._inverse(poses) ** 2 - q**2
+
+    def _constraints_jacobian(self, poses: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """Derivative (K, dof, dof) of :meth:`_constraints` with respect to the pose."""
+        return 2.0 * self._inverse(poses)[..., None] * self._jacobian(poses)
+
+    def _polish(self, starts: np.ndarray, q: np.ndarray, scale: np.ndarray) -> np.ndarray:
+        """Newton-polish candidate poses (K, dof) on the closure equations for ``q``.
+
+        Keeps the ones whose residuals fall below ``1e-9 * scale`` (per
+        equation), wraps the angles to (-pi, pi] and removes duplicates.
+        """
+        starts = starts[np.isfinite(starts).all(axis=1)]
+        sols, res = newton_polish(lambda p: self._constraints(p, q),
+                                  lambda p: self._constraints_jacobian(p, q), starts)
+        sols = sols[np.all(np.abs(res) <= 1e-9 * scale, axis=1)]
+        angular = np.asarray(self.angular)
+        sols[:, angular] = wrap_angle(sols[:, angular])
+        return unique_rows(sols)
 
     # --------------------------------------------------------------- kernels
     @abstractmethod

@@ -27,15 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from kinematics.algebra import (
-    newton_polish,
-    polynomial_roots,
-    tan_half_to_angle,
-    near_real,
-    trig_polynomial_in_tan_half,
-    unique_rows,
-    wrap_angle,
-)
+from kinematics.algebra import real_tan_half_angles, trig_polynomial_in_tan_half
 from kinematics.rows import row_all, row_max, row_min
 from kinematics.base import (
     DesignVariable,
@@ -298,22 +290,8 @@ class H4(Mechanism):
 
     def _forward(self, q: np.ndarray) -> np.ndarray:
         """All real poses for ``q``: real roots of eq. 24, then eq. 19-21, Newton-polished."""
-        poly = self.forward_polynomial(q)
-        theta = tan_half_to_angle(near_real(polynomial_roots(poly)))
-        if abs(poly[0]) < 1e-10:  # degree drop: theta = pi is a root (T infinite)
-            theta = np.append(theta, np.pi)
+        theta = real_tan_half_angles(self.forward_polynomial(q))
         if theta.size == 0:
             return np.empty((0, 4))
         num, den, *_ = self._linear_position(theta, q)
-        start = np.column_stack([num / den[:, None], theta])
-        start = start[np.isfinite(start).all(axis=1)]
-        sols, res = newton_polish(
-            lambda p: self._constraints(p, q),
-            lambda p: self._constraints_jacobian(p, q),
-            start,
-        )
-        scale = self.M**2
-        ok = np.all(np.abs(res) <= 1e-9 * scale, axis=1)
-        sols = sols[ok]
-        sols[:, 3] = wrap_angle(sols[:, 3])
-        return unique_rows(sols)
+        return self._polish(np.column_stack([num / den[:, None], theta]), q, self.M**2)

@@ -39,14 +39,10 @@ import math
 import numpy as np
 
 from kinematics.algebra import (
-    near_real,
-    newton_polish,
-    polynomial_roots,
+    real_tan_half_angles,
     sample_angles,
-    tan_half_to_angle,
     trig_coefficients,
     trig_to_tan_half,
-    unique_rows,
     wrap_angle,
 )
 from kinematics.annuli import annuli_intersection_area
@@ -251,32 +247,13 @@ class RPR3(Mechanism):
         poly = np.real(trig_to_tan_half(coefs))[::-1]
         return poly / np.max(np.abs(poly))
 
-    def _constraints(self, poses: np.ndarray, q: np.ndarray) -> np.ndarray:
-        return self._inverse(poses) ** 2 - q**2
-
-    def _constraints_jacobian(self, poses: np.ndarray, q: np.ndarray) -> np.ndarray:
-        return 2.0 * self._inverse(poses)[..., None] * self._jacobian(poses)
-
     def _forward(self, q: np.ndarray) -> np.ndarray:
         """Real roots of :meth:`forward_polynomial`, back-substituted and Newton-polished."""
-        poly = self.forward_polynomial(q)
-        phi = tan_half_to_angle(near_real(polynomial_roots(poly)))
-        if abs(poly[0]) < 1e-10:  # phi = pi is a root
-            phi = np.append(phi, np.pi)
+        phi = real_tan_half_angles(self.forward_polynomial(q))
         if phi.size == 0:
             return np.empty((0, 3))
         num, den = self._linear_position(phi, q)
-        start = np.column_stack([num / den[:, None], phi])
-        start = start[np.isfinite(start).all(axis=1)]
-        sols, res = newton_polish(
-            lambda p: self._constraints(p, q),
-            lambda p: self._constraints_jacobian(p, q),
-            start,
-        )
-        ok = np.all(np.abs(res) <= 1e-9 * np.maximum(q**2, 1e-300), axis=1)
-        sols = sols[ok]
-        sols[:, 2] = wrap_angle(sols[:, 2])
-        return unique_rows(sols)
+        return self._polish(np.column_stack([num / den[:, None], phi]), q, np.maximum(q**2, 1e-300))
 
     # ----------------------------------------------- the thesis' GA route
     def forward_ga(self, q: np.ndarray, seed: int, generations: int = 500,

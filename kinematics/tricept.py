@@ -33,15 +33,12 @@ import numpy as np
 from kinematics.algebra import (
     matrix_polynomial_eigenvalues,
     near_real,
-    newton_polish,
     polynomial_roots,
     sample_angles,
     sylvester_matrix_polynomial,
     tan_half_to_angle,
     trig_coefficients,
     trig_to_tan_half,
-    unique_rows,
-    wrap_angle,
 )
 from kinematics.base import (
     DesignVariable,
@@ -232,13 +229,6 @@ class Tricept(Mechanism):
         return np.stack([unit[..., 2], psi_col, moment[..., 1]], axis=-1)
 
     # --------------------------------------------------- forward kinematics
-    def _constraints(self, poses: np.ndarray, q: np.ndarray) -> np.ndarray:
-        """``|P_i - b_i|^2 - q_i^2`` (mm^2), shape (K, 3)."""
-        return self._inverse(poses) ** 2 - q**2
-
-    def _constraints_jacobian(self, poses: np.ndarray, q: np.ndarray) -> np.ndarray:
-        return 2.0 * self._inverse(poses)[..., None] * self._jacobian(poses)
-
     def _eliminants(self, psi: np.ndarray, theta: np.ndarray, q: np.ndarray, scale: float):
         """``G_j = Res_c(E_1, E_1 - E_j)`` for j = 2, 3 on a (psi, theta) grid.
 
@@ -295,12 +285,4 @@ class Tricept(Mechanism):
                 starts.extend([[-u1 + root, ps, th], [-u1 - root, ps, th]])
         if not starts:
             return np.empty((0, 3))
-        sols, res = newton_polish(
-            lambda p: self._constraints(p, q),
-            lambda p: self._constraints_jacobian(p, q),
-            np.array(starts),
-        )
-        ok = np.all(np.abs(res) <= 1e-9 * q**2, axis=1)
-        sols = sols[ok]
-        sols[:, 1:] = wrap_angle(sols[:, 1:])
-        return unique_rows(sols)
+        return self._polish(np.array(starts), q, q**2)
