@@ -266,7 +266,7 @@ def _integrate_polar(mechanism, resolution, orientation, min_ic, length, keep_sa
     marched outward in ``resolution`` steps to the first pose outside the
     workspace, then the crossing is bisected (30 halvings). The slice area is
     ``sum 1/2 rho^2 d_alpha`` (eq. 38-39). 1/kappa is integrated along each ray
-    with the midpoint rule in ``rho dd_rho``. Assumes star-shaped slices
+    with the midpoint rule in ``rho d_rho``. Assumes star-shaped slices
     around the centre, as the paper does.
     """
     angular = np.asarray(mechanism.angular)

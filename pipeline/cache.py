@@ -23,14 +23,22 @@ import pipeline
 __version__ = "0.1.0"
 
 
+#: pipeline modules whose code the cached stages execute (with all of kinematics)
+STAGE_MODULES = ("sample", "evaluate", "optimise", "objective", "ga", "de")
+
+
 def _source_digest() -> str:
-    """Hash of the kinematics and pipeline sources: any code change invalidates the cache."""
+    """Hash of the code the stages run: all of ``kinematics`` and :data:`STAGE_MODULES`.
+
+    Any change there invalidates the cache; changes to orchestration, I/O,
+    plots or the reproduction document do not.
+    """
     digest = hashlib.sha256()
-    for package in (kinematics, pipeline):
-        root = Path(package.__file__).parent
-        for path in sorted(root.glob("*.py")):
-            digest.update(path.name.encode())
-            digest.update(path.read_bytes())
+    files = sorted(Path(kinematics.__file__).parent.glob("*.py"))
+    files += [Path(pipeline.__file__).parent / f"{name}.py" for name in STAGE_MODULES]
+    for path in files:
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
     return digest.hexdigest()[:12]
 
 
