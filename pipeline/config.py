@@ -210,14 +210,10 @@ def validate(cfg: DictConfig | dict) -> dict:
         _fail("parallel.n_jobs", "an integer >= 1", par["n_jobs"])
     if par["backend"] not in BACKENDS:
         _fail("parallel.backend", "one of " + ", ".join(BACKENDS), par["backend"])
+    # the mechanism at the centre of the design box checks the fixed parameters
+    centre = [(lo + hi) / 2 for lo, hi in zip(design["lower"], design["upper"])]
     try:
-        cls(**_example_params(cls, mech))
-    except ValueError as exc:
+        cls.from_design(centre, **mech["fixed"])
+    except (TypeError, ValueError) as exc:
         raise ConfigError(f"mechanism.fixed: {exc}") from None
     return c
-
-
-def _example_params(cls, mech: dict) -> dict:
-    """Constructor parameters at the centre of the design box (checks ``fixed``)."""
-    centre = [(lo + hi) / 2 for lo, hi in zip(mech["design"]["lower"], mech["design"]["upper"])]
-    return cls.from_design(centre, **mech["fixed"]).params()

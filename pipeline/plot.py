@@ -64,7 +64,8 @@ def workspace_slice(mech: Mechanism, orientation: tuple[float, float], min_ic: f
         coarse = evaluate(mech, orientation=orientation, min_inverse_condition=min_ic,
                           resolution=16, return_samples=True, error_estimate=False)
         c_levels = coarse.samples[coarse.inside, 0]
-        c_best = float(np.median(c_levels)) if c_levels.size else float(np.mean(mech.pose_bounds(orientation)[0][0]))
+        lo, hi = mech.pose_bounds(orientation)
+        c_best = float(np.median(c_levels)) if c_levels.size else 0.5 * float(lo[0] + hi[0])
         ev = evaluate(mech, orientation=orientation, min_inverse_condition=min_ic, fixed={"c": c_best},
                       resolution=resolution, return_samples=True, error_estimate=False)
         return ev, (1, 2), f"c = {c_best:.0f} mm"

@@ -25,8 +25,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 from hydra import compose, initialize_config_dir  # noqa: E402
+from joblib import Memory  # noqa: E402
+from omegaconf import OmegaConf  # noqa: E402
 
-from kinematics import get_mechanism  # noqa: E402
+from kinematics import MECHANISMS, get_mechanism  # noqa: E402
 from kinematics.workspace import evaluate  # noqa: E402
 from pipeline.config import register_configs  # noqa: E402
 from pipeline.evaluate import design_objective  # noqa: E402
@@ -74,9 +76,7 @@ def table(header: list[str], rows: list[list]) -> str:
 
 
 def bound_positions(row: pd.Series, mechanism: str) -> str:
-    """Design variables of an optimum and where each sits in its box (from the mechanism yaml)."""
-    from kinematics import MECHANISMS
-
+    """Design variables of an optimum and where each sits in its box (``design_variables``)."""
     parts = []
     for var in MECHANISMS[mechanism].design_variables:
         value = float(row[var.name])
@@ -543,8 +543,6 @@ def extensions(r: Reproduction, h4_sweep_table: pd.DataFrame, best_runs: dict[st
     # Pareto front of (GDI, SURI) for H4 by NSGA-II, against the weighted-sum optima
     with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
         cfg = compose(config_name="config", overrides=["+experiment=h4_mixed"])
-    from omegaconf import OmegaConf
-
     c = OmegaConf.to_container(cfg, resolve=True)
     objective = design_objective(c["mechanism"], c["evaluate"], c["objective"], n_jobs=2)
     lower, upper = objective.bounds
@@ -552,8 +550,6 @@ def extensions(r: Reproduction, h4_sweep_table: pd.DataFrame, best_runs: dict[st
     def both(designs: np.ndarray) -> np.ndarray:
         rows = objective.evaluate_batch(designs)
         return rows[:, [2, 7]]  # gdi, suri
-
-    from joblib import Memory
 
     memo = Memory(str(r.output_dir / "cache"), verbose=0)
     pareto = memo.cache(_pareto_front, ignore=["both"])(c["mechanism"], c["evaluate"], 40, 40, 0, both)
@@ -638,8 +634,6 @@ The largest changes are {100 * worst_v:.2f} % in V and {100 * worst_g:.2f} % in 
 def _pareto_front(mechanism: dict, evaluate_cfg: dict, population: int, generations: int, seed: int,
                   both) -> np.ndarray:
     """Non-dominated (GDI, SURI) points of an NSGA-II run (cached on the config)."""
-    from kinematics import MECHANISMS
-
     variables = MECHANISMS[mechanism["name"]].design_variables
     lower = np.array([v.lower for v in variables])
     upper = np.array([v.upper for v in variables])

@@ -142,14 +142,17 @@ def _plots(c: dict, optimum: dict, run_dir: Path) -> dict[str, Path]:
 
 
 def run_from_hydra(cfg: DictConfig, run_dir: str) -> None:
-    """Entry of ``python -m pipeline``: a bad value prints one line and exits 2, writing nothing."""
+    """Entry of ``python -m pipeline``: a bad value prints one line and exits 2, writing nothing.
+
+    :func:`run_study` validates before any computation or file, so a
+    ConfigError leaves only the directory Hydra created, which is removed.
+    """
     try:
-        validate(cfg)
+        run_study(cfg, Path(run_dir))
     except ConfigError as exc:
         _remove_if_empty(Path(run_dir))
         print(f"error: {exc}", file=sys.stderr)
         sys.exit(2)
-    run_study(cfg, Path(run_dir))
 
 
 def _remove_if_empty(path: Path) -> None:
