@@ -44,11 +44,14 @@ def aggregate(sweep_dir: Path, dataset_dir: Path) -> Path:
     if not runs:
         raise ValueError(f"no runs (best.parquet) under {sweep_dir}")
     sweep_name = sweep_dir.name
+    best_frames = []
     for run in runs:
         run_key = f"{sweep_name}__{'_'.join(run.relative_to(sweep_dir).parts) or 'run'}"
         for table in TABLES:
             path = run / f"{table}.parquet"
             frame = pd.read_parquet(path)
+            if table == "best":
+                best_frames.append(frame.copy())
             frame.insert(0, "run", run_key)
             frame["run"] = frame["run"].astype("string")
             first = frame.iloc[0]
@@ -56,8 +59,7 @@ def aggregate(sweep_dir: Path, dataset_dir: Path) -> Path:
                       / f"objective={first['objective']}" / f"wd={float(first['w_d']):.4f}"
                       / f"{run_key}.parquet")
             write_parquet(frame.drop(columns=list(PARTITIONS)), target, read_metadata(path)["config"])
-    best = pd.concat([pd.read_parquet(r / "best.parquet") for r in runs], ignore_index=True)
-    plot_tradeoff(best, sweep_dir / "tradeoff.png")
+    plot_tradeoff(pd.concat(best_frames, ignore_index=True), sweep_dir / "tradeoff.png")
     log.info("aggregate: %d runs of %s into %s", len(runs), sweep_dir, dataset_dir)
     return dataset_dir
 

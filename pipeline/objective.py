@@ -67,13 +67,12 @@ class DesignObjective:
 
     @property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """Lower and upper bounds of the design variables, each (n_design,)."""
+        """The mechanism's default design bounds (``design_variables``), each (n_design,).
+
+        The pipeline takes its bounds from the config (``mechanism.design``), which may override these.
+        """
         variables = MECHANISMS[self.mechanism].design_variables
         return (np.array([v.lower for v in variables]), np.array([v.upper for v in variables]))
-
-    @property
-    def variable_names(self) -> list[str]:
-        return [v.name for v in MECHANISMS[self.mechanism].design_variables]
 
     def fitness_of(self, values: np.ndarray) -> np.ndarray:
         """Fitness from evaluation rows (K, len(EVALUATION_FIELDS)); 0 for invalid designs."""

@@ -32,6 +32,7 @@ from kinematics import MECHANISMS, get_mechanism  # noqa: E402
 from kinematics.workspace import evaluate  # noqa: E402
 from pipeline.config import register_configs  # noqa: E402
 from pipeline.evaluate import design_objective  # noqa: E402
+from pipeline.objective import EVALUATION_FIELDS  # noqa: E402
 from pipeline.nsga2 import nsga2  # noqa: E402
 from pipeline.plot import plot_convergence, plot_workspace  # noqa: E402
 from pipeline.run import run_study  # noqa: E402
@@ -545,11 +546,10 @@ def extensions(r: Reproduction, h4_sweep_table: pd.DataFrame, best_runs: dict[st
         cfg = compose(config_name="config", overrides=["+experiment=h4_mixed"])
     c = OmegaConf.to_container(cfg, resolve=True)
     objective = design_objective(c["mechanism"], c["evaluate"], c["objective"], n_jobs=2)
-    lower, upper = objective.bounds
+    columns = [EVALUATION_FIELDS.index("gdi"), EVALUATION_FIELDS.index("suri")]
 
     def both(designs: np.ndarray) -> np.ndarray:
-        rows = objective.evaluate_batch(designs)
-        return rows[:, [2, 7]]  # gdi, suri
+        return objective.evaluate_batch(designs)[:, columns]
 
     memo = Memory(str(r.output_dir / "cache"), verbose=0)
     pareto = memo.cache(_pareto_front, ignore=["both"])(c["mechanism"], c["evaluate"], 40, 40, 0, both)
@@ -633,10 +633,9 @@ The largest changes are {100 * worst_v:.2f} % in V and {100 * worst_g:.2f} % in 
 
 def _pareto_front(mechanism: dict, evaluate_cfg: dict, population: int, generations: int, seed: int,
                   both) -> np.ndarray:
-    """Non-dominated (GDI, SURI) points of an NSGA-II run (cached on the config)."""
-    variables = MECHANISMS[mechanism["name"]].design_variables
-    lower = np.array([v.lower for v in variables])
-    upper = np.array([v.upper for v in variables])
+    """Non-dominated (GDI, SURI) points of an NSGA-II run over the config's design box (cached)."""
+    lower = np.array(mechanism["design"]["lower"], dtype=float)
+    upper = np.array(mechanism["design"]["upper"], dtype=float)
     result = nsga2(both, lower, upper, population=population, generations=generations, seed=seed)
     return result.objectives[result.front]
 
