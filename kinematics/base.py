@@ -182,6 +182,15 @@ class Mechanism(ABC):
     # ------------------------------------------------ workspace description
     #: design variables (name, lower, upper, unit) for :meth:`from_design`
     design_variables: ClassVar[tuple["DesignVariable", ...]] = ()
+    #: constructor parameters that are not design variables, with their defaults
+    #: (the pipeline's ``mechanism.fixed``; readings of the paper are among them)
+    default_fixed: ClassVar[dict[str, object]] = {}
+    #: grid nodes per evaluation at the default resolution (speed vs. accuracy;
+    #: see :func:`kinematics.workspace.default_resolution`)
+    default_nodes: ClassVar[int] = 32**3
+    #: coarsest resolution whose volume and GDI stay within about 3 % of a fine
+    #: grid (measured in ``tests/test_workspace.py``); the pipeline refuses coarser
+    min_resolution: ClassVar[int] = 8
 
     @classmethod
     def from_design(cls, design: np.ndarray, **fixed: object) -> "Mechanism":
@@ -228,6 +237,39 @@ class Mechanism(ABC):
         none). ``None`` (the default) means no such axis.
         """
         return None
+
+    def volume_unit(self, orientation: tuple[float, float] | None = None,
+                    fixed: dict[str, float] | None = None) -> str:
+        """Unit of the workspace volume over the pose variables not in ``fixed``.
+
+        E.g. ``"cm³·rad"`` for H4; angular variables count only when the
+        orientation range (rad) has non-zero width.
+        """
+        orientation = self.default_orientation if orientation is None else orientation
+        fixed = fixed or {}
+        free = [a for n, a in zip(self.pose_names, self.angular) if n not in fixed]
+        n_angles = sum(free) if float(orientation[0]) < float(orientation[1]) else 0
+        n_lengths = len(free) - sum(free)
+        powers = {1: "", 2: "²", 3: "³"}
+        unit = f"{self.length_unit}{powers.get(n_lengths, f'^{n_lengths}')}" if n_lengths else ""
+        if n_angles:
+            unit += ("·" if unit else "") + f"rad{powers.get(n_angles, f'^{n_angles}')}"
+        return unit or "1"
+
+    def plot_slice(self, orientation: tuple[float, float]) -> tuple[dict[str, float], tuple[int, int], str]:
+        """The 2-D slice of the workspace that figures show.
+
+        Returns ``(fixed, (i, j), label)``: pose variables held fixed (for
+        :func:`kinematics.workspace.evaluate`), the two plotted columns, and a
+        label of the slice. Default: angular variables at the middle of
+        ``orientation`` (rad), the first two pose variables plotted; a
+        mechanism whose first two variables are not the natural plane
+        overrides it.
+        """
+        mid = 0.5 * (float(orientation[0]) + float(orientation[1]))
+        fixed = {n: mid for n, a in zip(self.pose_names, self.angular) if a}
+        label = ", ".join(f"{n} = {np.degrees(v):.1f}°" for n, v in fixed.items())
+        return fixed, (0, 1), label
 
     def within_joint_limits(self, poses: np.ndarray) -> np.ndarray:
         """Passive-joint limits (N,) bool; True for mechanisms without such limits."""

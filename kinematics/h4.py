@@ -13,12 +13,30 @@ Geometry (seed 000 eq. 13-16, generalised from the example eq. 25)
   ``C_1 = B + Rot(theta) (-h, 0, 0)`` carries B_1, B_2; ``C_2 = B + Rot(theta) (h, 0, 0)``
   carries B_3, B_4; the links C_i B_i = (0, Q_i, 0) only translate (eq. 29).
 * Actuator carriages: ``A_i = (a_i, b_i, q_i)``. The paper gives base points and
-  rod lengths only for its example (eq. 25). We generalise them so that the
-  example is reproduced exactly: at the home pose ``(0, 0, -Qz, 0)`` with
-  ``q = 0``, ``(a_i, b_i) = (P_i, Q_i) + Qz * o_i`` with horizontal offsets
-  ``o = (-1, -1), (-1, 1), (0, 1), (1, 0)``, and rod lengths
-  ``M = Qz * (sqrt 3, sqrt 3, sqrt 2, sqrt 2)``: every rod drops exactly Qz at home.
-  For h = d = 6, Qz = 42 this gives A_1 = (-48, -48, 0), ..., A_4 = (48, -6, 0) of eq. 25.
+  rod lengths only for its example (eq. 25): for h = d = 6, Qz = 42,
+  ``A = (-48, -48), (-48, 48), (6, 48), (48, -6)`` and rods
+  ``M = Qz * (sqrt 3, sqrt 3, sqrt 2, sqrt 2)``. How they follow a design is
+  not stated; it is the reading ``base`` (every option reproduces eq. 25-27
+  exactly at h = d = 6, Qz = 42):
+
+  - ``"scaled"`` (default): eq. 25's base scaled with Qz,
+    ``(a_i, b_i) = (Qz / 42) * A_i(eq. 25)``, rods ``M = Qz * (sqrt 3, sqrt 3,
+    sqrt 2, sqrt 2)``. The base is a machine frame sized by Qz; the travelling
+    plate (d, h) is designed inside it. d, h and Qz all change V and GDI.
+  - ``"tracking"``: the base follows the plate, ``(a_i, b_i) = (P_i, Q_i) +
+    Qz * o_i`` with ``o = (-1, -1), (-1, 1), (0, 1), (1, 0)``, so every rod
+    drops exactly Qz at the home pose. Then Q_i (which carries d) cancels from
+    ``A_iB_i``: **d has no effect on V or GDI** (it moves only V*). Kept to
+    show why the first version's d was inert.
+  - ``"fixed"``: eq. 25's base points and rods whatever the design; Qz only
+    names the home height, so it has no effect on V or GDI.
+
+  Why "scaled" is the default: it is the only reading of the three in which
+  the paper's three design variables all act (the paper optimises all three
+  and reports different values for each), and it keeps eq. 25's layout, whose
+  proportions the paper gives, at every size.
+* Ball-joint limit ``ball_joint_limit`` (deg, optional): the largest angle
+  between a rod and the vertical; ``None`` (the paper states none) disables it.
 * Actuator range ``0 <= q_i <= stroke`` (Delta q, default 100 cm, see
   :attr:`H4.actuator_range`).
 """
@@ -41,6 +59,11 @@ _SIGN_P = np.array([-1.0, -1.0, 1.0, 1.0])
 _SIGN_Q = np.array([-1.0, 1.0, 1.0, -1.0])
 _OFFSETS = np.array([[-1.0, -1.0], [-1.0, 1.0], [0.0, 1.0], [1.0, 0.0]])
 _ROD_FACTOR = np.array([np.sqrt(3.0), np.sqrt(3.0), np.sqrt(2.0), np.sqrt(2.0)])
+#: eq. 25's base points (cm) at Qz = 42 cm
+_EQ25_BASE = np.array([[-48.0, -48.0], [-48.0, 48.0], [6.0, 48.0], [48.0, -6.0]])
+_EQ25_QZ = 42.0
+#: readings of how the base points and rods follow (d, h, Qz); see the module docstring
+BASE_READINGS = ("scaled", "tracking", "fixed")
 
 
 class H4(Mechanism):
@@ -58,6 +81,10 @@ class H4(Mechanism):
     stroke : float
         Actuator motion range Delta q (cm), > 0. Default 100 cm: Table 2's
         d = 1.00008 cm at the bound d/Delta q = 0.01 implies Delta q = 100 cm.
+    base : {"scaled", "tracking", "fixed"}
+        How base points and rods follow the design (module docstring).
+    ball_joint_limit : float, optional
+        Largest rod-to-vertical angle (deg) in (0, 90); ``None``: no limit.
     """
 
     name = "h4"
@@ -66,19 +93,41 @@ class H4(Mechanism):
     angular = (False, False, False, True)
     length_unit = "cm"
 
-    def __init__(self, d: float, h: float, Qz: float, stroke: float = 100.0) -> None:
+    default_fixed = {"stroke": 100.0, "base": "scaled", "ball_joint_limit": None}
+    default_nodes = 24**3
+    min_resolution = 12
+
+    def __init__(self, d: float, h: float, Qz: float, stroke: float = 100.0,
+                 base: str = "scaled", ball_joint_limit: float | None = None) -> None:
         owner = "H4"
         self.d = check_positive(owner, "d", d)
         self.h = check_positive(owner, "h", h)
         self.Qz = check_positive(owner, "Qz", Qz)
         self.stroke = check_positive(owner, "stroke", stroke)
-        self._params = {"d": self.d, "h": self.h, "Qz": self.Qz, "stroke": self.stroke}
+        if base not in BASE_READINGS:
+            raise ValueError(f"H4: parameter 'base' must be one of {', '.join(BASE_READINGS)}; got {base!r}")
+        self.base = base
+        if ball_joint_limit is not None:
+            ball_joint_limit = check_positive(owner, "ball_joint_limit", ball_joint_limit)
+            if ball_joint_limit >= 90.0:
+                raise ValueError(f"H4: parameter 'ball_joint_limit' must be in (0, 90) deg or None; "
+                                 f"got {ball_joint_limit!r}")
+        self.ball_joint_limit = ball_joint_limit
+        self._params = {"d": self.d, "h": self.h, "Qz": self.Qz, "stroke": self.stroke,
+                        "base": self.base, "ball_joint_limit": self.ball_joint_limit}
         self.P = self.h * _SIGN_P
         self.Q = self.d * _SIGN_Q
-        base = np.stack([self.P, self.Q], axis=1) + self.Qz * _OFFSETS
-        self.a = base[:, 0].copy()
-        self.b = base[:, 1].copy()
-        self.M = self.Qz * _ROD_FACTOR
+        if base == "tracking":
+            points = np.stack([self.P, self.Q], axis=1) + self.Qz * _OFFSETS
+            self.M = self.Qz * _ROD_FACTOR
+        elif base == "scaled":
+            points = _EQ25_BASE * (self.Qz / _EQ25_QZ)
+            self.M = self.Qz * _ROD_FACTOR
+        else:
+            points = _EQ25_BASE.copy()
+            self.M = _EQ25_QZ * _ROD_FACTOR
+        self.a = points[:, 0].copy()
+        self.b = points[:, 1].copy()
 
     design_variables = (
         DesignVariable("d_ratio", 0.01, 0.15, "d / stroke"),
@@ -89,6 +138,7 @@ class H4(Mechanism):
     @classmethod
     def from_design(cls, design: np.ndarray, **fixed: object) -> "H4":
         """H4 of the scaled design vector ``(d, h, Qz) / stroke`` of seed 000 Sec. 4.4."""
+        fixed = dict(fixed)
         stroke = float(fixed.pop("stroke", 100.0))
         d_ratio, h_ratio, qz_ratio = (float(v) for v in np.ravel(design))
         return cls(d=d_ratio * stroke, h=h_ratio * stroke, Qz=qz_ratio * stroke,
@@ -157,6 +207,19 @@ class H4(Mechanism):
         upper = self.stroke - row_max(drop)
         reachable = row_all(np.isfinite(drop))
         return 2, np.where(reachable, lower, np.inf), np.where(reachable, upper, -np.inf)
+
+    def within_joint_limits(self, poses: np.ndarray) -> np.ndarray:
+        """Rod-to-vertical angle within ``ball_joint_limit`` (N,) bool; all True without a limit.
+
+        The angle is ``arccos(|L_z| / M_i)`` with ``L_i = B_i - A_i``; it does not
+        depend on z, so the exact z integration still holds.
+        """
+        poses = self._check_poses(poses)
+        if self.ball_joint_limit is None:
+            return np.ones(poses.shape[0], dtype=bool)
+        dx, dy, _, _ = self._horizontal(poses)
+        horizontal = np.hypot(dx, dy)  # |L_i| sin(angle) = horizontal reach
+        return row_all(horizontal <= self.M * np.sin(np.radians(self.ball_joint_limit)))
 
     def base_points(self, q: np.ndarray) -> np.ndarray:
         """Carriage points ``A_i = (a_i, b_i, q_i)`` (eq. 13), shape (N, 4, 3), cm."""

@@ -43,6 +43,10 @@ class RPR2(Mechanism):
         #: base joints O_1, O_2 (mm), shape (2, 2)
         self.base = np.array([[0.0, 0.0], [self.b, 0.0]])
 
+    default_fixed = {"q_max": 9.6}
+    default_nodes = 400**2
+    min_resolution = 64
+
     design_variables = (
         DesignVariable("b", 1.0, 10.0, "mm"),
         DesignVariable("q_min", 3.0, 9.0, "mm"),
@@ -51,6 +55,7 @@ class RPR2(Mechanism):
     @classmethod
     def from_design(cls, design: np.ndarray, **fixed: object) -> "RPR2":
         """``(b, q_min)`` with ``q_max`` fixed (default 9.6 mm, the paper's)."""
+        fixed = dict(fixed)
         b, q_min = (float(v) for v in np.ravel(design))
         return cls(b=b, q_min=q_min, q_max=float(fixed.pop("q_max", 9.6)), **fixed)
 

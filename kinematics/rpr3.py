@@ -100,6 +100,10 @@ class RPR3(Mechanism):
         self._params = {"base": self.base.tolist(), "platform": self.platform.tolist(),
                         "rho_min": self.rho_min, "rho_max": self.rho_max}
 
+    default_fixed = {"rho_min": 80.0, "rho_max": 160.0}
+    default_nodes = 32**3
+    min_resolution = 24
+
     design_variables = (
         DesignVariable("base_side", 100.0, 300.0, "mm"),
         DesignVariable("platform_side", 20.0, 100.0, "mm"),

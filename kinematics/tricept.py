@@ -98,6 +98,10 @@ class Tricept(Mechanism):
         self.p[:, 2] = self.d  # p_i + d k, in the platform frame
         self.base = _triangle(self.b)
 
+    default_fixed = {"q_min": 400.0, "q_max": 750.0, "cone": 60.0}
+    default_nodes = 32**3
+    min_resolution = 16
+
     design_variables = (
         DesignVariable("a", 200.0, 300.0, "mm"),
         DesignVariable("b", 300.0, 500.0, "mm"),
@@ -109,6 +113,17 @@ class Tricept(Mechanism):
         """psi, theta in [-pi/2, pi/2] rad: a universal joint's usable range;
         the cone limit (Table 1) bounds the workspace well inside it."""
         return (-np.pi / 2, np.pi / 2)
+
+    def plot_slice(self, orientation: tuple[float, float]) -> tuple[dict[str, float], tuple[int, int], str]:
+        """The (psi, theta) plane at the median c of the workspace (seed 001 Fig. 3)."""
+        from kinematics.workspace import evaluate  # workspace imports this module's base
+
+        coarse = evaluate(self, orientation=orientation, resolution=16, return_samples=True,
+                          error_estimate=False)
+        levels = coarse.samples[coarse.inside, 0]
+        lo, hi = self.pose_bounds(orientation)
+        c = float(np.median(levels)) if levels.size else 0.5 * float(lo[0] + hi[0])
+        return {"c": c}, (1, 2), f"c = {c:.0f} mm"
 
     def pose_bounds(self, orientation: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
         """Box of the (upper, c > 0) workspace (mm, rad).

@@ -44,11 +44,6 @@ import numpy as np
 from kinematics.base import Mechanism
 from kinematics.rows import row_all
 
-#: default number of grid nodes per evaluation; the default resolution is the
-#: largest whose grid (over the axes actually sampled) has at most this many.
-#: Chosen so that a GA run of 4,500 evaluations stays near a minute on 2 workers
-#: with a resolution error well under 1 % (benchmarks/evaluate.py).
-DEFAULT_NODES = {"h4": 24**3, "tricept": 32**3, "rpr3": 32**3, "rpr2": 400**2}
 #: poses evaluated per vectorised chunk (bounds memory, not a per-pose loop)
 CHUNK = 1 << 17
 METHODS = ("grid", "polar")
@@ -197,11 +192,16 @@ def sampled_axes(mechanism: Mechanism, orientation: tuple[float, float],
 
 def default_resolution(mechanism: Mechanism, orientation: tuple[float, float] | None = None,
                        fixed: dict[str, float] | None = None) -> int:
-    """Largest resolution whose grid has at most ``DEFAULT_NODES[name]`` nodes."""
+    """Largest resolution whose grid has at most ``mechanism.default_nodes`` nodes.
+
+    The node budgets (class attribute of each mechanism) keep a GA run of
+    4,500 evaluations near a minute on 2 workers with a resolution error well
+    under 1 % (benchmarks/evaluate.py).
+    """
     if orientation is None:
         orientation = mechanism.default_orientation
     n_axes = max(len(sampled_axes(mechanism, orientation, fixed)), 1)
-    nodes = DEFAULT_NODES.get(mechanism.name, 32**3)
+    nodes = int(mechanism.default_nodes)
     res = int(round(nodes ** (1.0 / n_axes)))
     while res > 1 and res**n_axes > nodes:
         res -= 1
@@ -352,7 +352,7 @@ def evaluate(mechanism: Mechanism, *, resolution: int | None = None,
     resolution : int, optional
         Grid points per sampled axis (larger is finer; doubling it refines
         every axis). Default :func:`default_resolution`: the node budget
-        :data:`DEFAULT_NODES` spread over the sampled axes (H4 24, Tricept
+        :attr:`~kinematics.base.Mechanism.default_nodes` spread over the sampled axes (H4 24, Tricept
         32, 3-RPR 32 over (x, y, phi) or 181 at constant phi, 2-RPR 400).
     orientation : (float, float), optional
         Range (rad) of every angular pose variable; ``lo == hi`` asks for the
@@ -428,11 +428,7 @@ def evaluate(mechanism: Mechanism, *, resolution: int | None = None,
         volume_error = abs(volume - other_volume)
         gdi_error = abs(ic_mean - other_mean)
     reference = mechanism.reference_volume(orientation)
-    angular_names = [n for n, a in zip(mechanism.pose_names, mechanism.angular) if a and n not in fixed]
-    n_angles = len(angular_names) if orientation[0] < orientation[1] else 0
-    lengths = mechanism.dof - sum(mechanism.angular) - sum(
-        1 for n, a in zip(mechanism.pose_names, mechanism.angular) if not a and n in fixed)
-    unit = f"{mechanism.length_unit}^{lengths}" + (f" rad^{n_angles}" if n_angles else "")
+    unit = mechanism.volume_unit(orientation, fixed)
     return Evaluation(
         mechanism=mechanism.name,
         volume=float(volume),

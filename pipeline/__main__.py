@@ -1,9 +1,8 @@
-"""Hydra entry point: ``python -m pipeline [+experiment=NAME] [key=value ...]`` (``-m`` for sweeps)."""
+"""Entry point: ``python -m pipeline`` (or ``pm-design``) ``[+experiment=NAME] [key=value ...]``, ``-m`` for sweeps."""
 
 from __future__ import annotations
 
 import hydra
-from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
 from pipeline.config import register_configs
@@ -13,8 +12,8 @@ register_configs()
 
 
 @hydra.main(version_base="1.3", config_path="../conf", config_name="config")
-def main(cfg: DictConfig) -> None:
-    run_from_hydra(cfg, HydraConfig.get().runtime.output_dir)
+def main(cfg: DictConfig) -> dict:
+    return run_from_hydra(cfg)
 
 
 if __name__ == "__main__":

@@ -1,91 +1,257 @@
-"""Stage 4, aggregate: the runs of a sweep into one hive-partitioned Parquet dataset.
+"""Stage 4, aggregate: complete runs into one Parquet dataset with one schema per table.
 
-Layout: ``<dataset>/<table>/mechanism=<name>/objective=<name>/wd=<w_d>/<sweep>__<run>.parquet``
-for the tables ``best``, ``history`` and ``designs``. The partition columns
-are not stored in the files (pyarrow refuses a column that is both), except
-``w_d``, which stays a float64 column; ``wd`` is its partition label. So
-``pd.read_parquet(<dataset>/best)`` gives ``w_d`` float64 and ``mechanism``,
-``objective`` categorical. Re-aggregating a sweep overwrites its own files.
+Layout: ``<dataset>/<table>/<run_id>.parquet`` for the tables ``best``,
+``history``, ``designs``, ``front`` (Pareto runs) and ``runs`` (one row per
+run: ids, status, timings, overrides, source). Every file of a table has
+the table's *unified* schema (the union of all runs' columns, absent values
+null, field metadata with units), so ``pd.read_parquet("<dataset>/best")``
+returns every column of every run whatever mechanisms and objectives are
+mixed.
 
-Run on its own: ``python -m pipeline.aggregate <sweep dir> [--dataset DIR]``;
-a Hydra multirun triggers it at its end (:class:`AggregateOnMultirunEnd`).
+Guarantees (tested in ``tests/test_dataset.py``):
+
+* keyed on the run id (``<config_hash>-<launch_id>-<job>``), never on folder
+  names: aggregating a run again, by any path, changes nothing; different
+  runs never overwrite each other;
+* only runs whose ``manifest.json`` says ``complete`` are taken; the others
+  are skipped with one line each;
+* all-or-nothing: the new dataset is built beside the old one (a copy plus
+  the new runs) and swapped in by renaming; on any error the previous
+  dataset is left as it was. An exclusive lock serialises aggregations.
+
+Run on its own: ``python -m pipeline.aggregate <dir> [<dir> ...] [--dataset DIR]``;
+a multirun aggregates its sweep at its end (:mod:`pipeline.sweeper`).
 """
 
 from __future__ import annotations
 
 import argparse
+import fcntl
+import json
 import logging
+import os
+import secrets
+import shutil
 import sys
+from contextlib import contextmanager
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import pandas as pd
-from hydra.experimental.callback import Callback
-from omegaconf import DictConfig
+import pyarrow as pa
+import pyarrow.parquet as pq
 
-from pipeline.io import read_metadata, write_parquet
-from pipeline.plot import plot_tradeoff
+from pipeline.errors import ConfigError, RunError
+from pipeline.io import to_table, write_table
+from pipeline.run import MANIFEST, TABLES, read_manifest
 
 log = logging.getLogger(__name__)
 
-TABLES = ("best", "history", "designs")
-PARTITIONS = ("mechanism", "objective")
+DATASET_TABLES = (*TABLES, "runs")
 
 
-def find_runs(sweep_dir: Path) -> list[Path]:
-    """Run directories (those holding a ``best.parquet``) below ``sweep_dir``, sorted."""
-    return sorted(p.parent for p in Path(sweep_dir).rglob("best.parquet")
-                  if "dataset" not in p.relative_to(sweep_dir).parts)
+@dataclass
+class AggregateReport:
+    """What one aggregation did: run ids added, already present, and runs skipped (with reasons)."""
+
+    added: list[str] = field(default_factory=list)
+    present: list[str] = field(default_factory=list)
+    skipped: list[str] = field(default_factory=list)
+    best: pd.DataFrame | None = None
 
 
-def aggregate(sweep_dir: Path, dataset_dir: Path) -> Path:
-    """Write the sweep's runs into ``dataset_dir``; returns it. Also plots ``tradeoff.png`` in the sweep."""
-    sweep_dir, dataset_dir = Path(sweep_dir), Path(dataset_dir)
-    runs = find_runs(sweep_dir)
-    if not runs:
-        raise ValueError(f"no runs (best.parquet) under {sweep_dir}")
-    sweep_name = sweep_dir.name
-    best_frames = []
-    for run in runs:
-        run_key = f"{sweep_name}__{'_'.join(run.relative_to(sweep_dir).parts) or 'run'}"
-        for table in TABLES:
-            path = run / f"{table}.parquet"
-            frame = pd.read_parquet(path)
-            if table == "best":
-                best_frames.append(frame.copy())
-            frame.insert(0, "run", run_key)
-            frame["run"] = frame["run"].astype("string")
-            first = frame.iloc[0]
-            target = (dataset_dir / table / f"mechanism={first['mechanism']}"
-                      / f"objective={first['objective']}" / f"wd={float(first['w_d']):.4f}"
-                      / f"{run_key}.parquet")
-            write_parquet(frame.drop(columns=list(PARTITIONS)), target, read_metadata(path)["config"])
-    plot_tradeoff(pd.concat(best_frames, ignore_index=True), sweep_dir / "tradeoff.png")
-    log.info("aggregate: %d runs of %s into %s", len(runs), sweep_dir, dataset_dir)
-    return dataset_dir
+def find_runs(source: Path) -> list[Path]:
+    """Run directories (holding a manifest) at or below ``source``, sorted; datasets are not searched."""
+    source = Path(source)
+    found = [p.parent for p in source.rglob(MANIFEST)]
+    if (source / MANIFEST).exists():
+        found.append(source)
+    return sorted({p.resolve() for p in found})
 
 
-class AggregateOnMultirunEnd(Callback):
-    """Hydra callback: aggregate the sweep into ``paths.dataset_dir`` when a multirun ends."""
+def _collect(sources: list[Path]) -> tuple[list[tuple[Path, dict]], list[str]]:
+    complete: dict[str, tuple[Path, dict]] = {}
+    skipped = []
+    for source in sources:
+        for run in find_runs(source):
+            manifest = read_manifest(run)
+            if manifest is None:
+                skipped.append(f"{run}: unreadable manifest")
+                continue
+            status = manifest.get("status")
+            if status != "complete":
+                reason = manifest.get("reason") or "not finished"
+                skipped.append(f"{run}: {status} ({reason})")
+                continue
+            missing = [f for f in manifest.get("files", []) if f.endswith(".parquet") and not (run / f).exists()]
+            if missing:
+                skipped.append(f"{run}: incomplete (missing {', '.join(missing)})")
+                continue
+            complete.setdefault(manifest["run_id"], (run, manifest))
+    return list(complete.values()), skipped
 
-    def on_multirun_end(self, config: DictConfig, **kwargs) -> None:
-        sweep_dir = Path(config.hydra.sweep.dir)
-        if find_runs(sweep_dir):
-            aggregate(sweep_dir, Path(config.paths.dataset_dir))
+
+def dataset_run_ids(dataset_dir: Path) -> set[str]:
+    """Run ids already in the dataset (its ``runs`` table)."""
+    runs = Path(dataset_dir) / "runs"
+    return {p.stem for p in runs.glob("*.parquet")} if runs.is_dir() else set()
+
+
+def unify(schemas: list[pa.Schema]) -> pa.Schema:
+    """Union of the schemas' fields (first occurrence's metadata; numeric types promoted)."""
+    plain = [pa.schema(list(s), metadata=None) for s in schemas]
+    return pa.unify_schemas(plain, promote_options="permissive")
+
+
+def conform(table: pa.Table, schema: pa.Schema) -> pa.Table:
+    """``table`` with exactly ``schema``'s fields, in its order: absent columns null, types cast."""
+    arrays = [table.column(f.name).cast(f.type) if f.name in table.column_names
+              else pa.nulls(table.num_rows, f.type) for f in schema]
+    return pa.Table.from_arrays(arrays, schema=pa.schema(list(schema), metadata=table.schema.metadata))
+
+
+@contextmanager
+def _locked(dataset_dir: Path):
+    lock_path = dataset_dir.parent / f".{dataset_dir.name}.lock"
+    with open(lock_path, "w") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def _run_tables(run: Path, manifest: dict) -> dict[str, pa.Table]:
+    ids = {"run_id": manifest["run_id"], "launch_id": manifest["launch_id"], "job": int(manifest["job"])}
+    out = {}
+    for table in TABLES:
+        path = run / f"{table}.parquet"
+        if not path.exists():
+            continue
+        data = pq.read_table(path)
+        for k, (name, value) in enumerate(ids.items()):
+            typ = pa.int64() if name == "job" else pa.string()
+            data = data.add_column(k, pa.field(name, typ), pa.array([value] * data.num_rows, typ))
+        out[table] = data
+    best = out["best"].slice(0, 1).to_pandas()
+    runs = pd.DataFrame([{**ids, "config_hash": manifest["config_hash"],
+                          **{k: best[k].iloc[0] for k in ("experiment", "mechanism", "objective", "w_d",
+                                                          "optimizer", "seed")},
+                          "status": manifest["status"], "wall_time": float(manifest["timings"].get("total", 0.0)),
+                          "overrides": " ".join(manifest.get("overrides", [])),
+                          "code_version": manifest.get("code_version", ""),
+                          "git_commit": manifest.get("git_commit", ""), "source": str(run)}])
+    out["runs"] = to_table(runs)
+    return out
+
+
+def aggregate(sources: Path | list[Path], dataset_dir: Path) -> AggregateReport:
+    """Add the complete runs found under ``sources`` to the dataset at ``dataset_dir``.
+
+    Raises
+    ------
+    ConfigError
+        A source that does not exist, or a dataset path that cannot be written (one line).
+    RunError
+        A failure while building (disk full, ...): the previous dataset is intact.
+    """
+    sources = [Path(s) for s in ([sources] if isinstance(sources, (str, Path)) else sources)]
+    dataset_dir = Path(dataset_dir)
+    for source in sources:
+        if not source.is_dir():
+            raise ConfigError(f"source={str(source)!r} is invalid: allowed an existing run, sweep or parent directory")
+    from pipeline.config import check_writable
+
+    check_writable("--dataset", dataset_dir)
+    if dataset_dir.exists() and any(dataset_dir.iterdir()) and not (dataset_dir / "runs").is_dir():
+        raise ConfigError(f"--dataset={str(dataset_dir)!r} is invalid: the directory holds something else "
+                          f"than a dataset; allowed: an empty, new or dataset directory")
+    report = AggregateReport()
+    records, report.skipped = _collect(sources)
+    for line in report.skipped:
+        log.warning("aggregate: skipped %s", line)
+    dataset_dir.parent.mkdir(parents=True, exist_ok=True)
+    with _locked(dataset_dir):
+        present = dataset_run_ids(dataset_dir)
+        new = [(run, m) for run, m in records if m["run_id"] not in present]
+        report.present = sorted(m["run_id"] for _, m in records if m["run_id"] in present)
+        if new:
+            _build_and_swap(dataset_dir, new)
+        report.added = [m["run_id"] for _, m in new]
+    bests = [pq.read_table(run / "best.parquet").to_pandas() for run, _ in records]
+    report.best = pd.concat(bests, ignore_index=True) if bests else None
+    log.info("aggregate: %d runs added, %d already present, %d skipped -> %s", len(report.added),
+             len(report.present), len(report.skipped), dataset_dir)
+    return report
+
+
+def _build_and_swap(dataset_dir: Path, new: list[tuple[Path, dict]]) -> None:
+    token = secrets.token_hex(4)
+    staging = dataset_dir.parent / f".{dataset_dir.name}.staging-{token}"
+    try:
+        if dataset_dir.exists():
+            shutil.copytree(dataset_dir, staging)
+        else:
+            staging.mkdir(parents=True)
+        tables = [(m, _run_tables(run, m)) for run, m in new]
+        for name in DATASET_TABLES:
+            fresh = [(m, t[name]) for m, t in tables if name in t]
+            if not fresh:
+                continue
+            folder = staging / name
+            folder.mkdir(exist_ok=True)
+            old_files = sorted(folder.glob("*.parquet"))
+            schemas = ([pq.read_schema(old_files[0])] if old_files else []) + [t.schema for _, t in fresh]
+            schema = _with_field_metadata(unify(schemas), schemas)
+            if old_files and not pq.read_schema(old_files[0]).equals(schema, check_metadata=False):
+                for path in old_files:  # a new column: every file takes the unified schema
+                    write_table(conform(pq.read_table(path), schema), path)
+            for manifest, table in fresh:
+                write_table(conform(table, schema), folder / f"{manifest['run_id']}.parquet", manifest["config"])
+        if dataset_dir.exists():
+            old = dataset_dir.parent / f".{dataset_dir.name}.old-{token}"
+            os.rename(dataset_dir, old)
+            try:
+                os.rename(staging, dataset_dir)
+            except OSError:
+                os.rename(old, dataset_dir)
+                raise
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.rename(staging, dataset_dir)
+    except OSError as exc:
+        raise RunError(f"aggregate into {dataset_dir} failed, dataset unchanged: {exc.strerror or exc}") from None
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+
+
+def _with_field_metadata(schema: pa.Schema, sources: list[pa.Schema]) -> pa.Schema:
+    """Give each unified field the unit metadata it has in the first schema that holds it."""
+    meta = {}
+    for s in sources:
+        for f in s:
+            meta.setdefault(f.name, f.metadata)
+    return pa.schema([f.with_metadata(meta.get(f.name)) for f in schema])
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m pipeline.aggregate", description=__doc__.split("\n")[0])
-    parser.add_argument("sweep_dir", type=Path, help="directory of a sweep (or a single run)")
+    parser = argparse.ArgumentParser(prog="python -m pipeline.aggregate",
+                                     description=__doc__.split("\n")[0])
+    parser.add_argument("sources", type=Path, nargs="+", help="run, sweep or parent directories")
     parser.add_argument("--dataset", type=Path, default=Path("outputs/dataset"),
                         help="dataset directory (default: outputs/dataset)")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     try:
-        aggregate(args.sweep_dir, args.dataset)
-    except ValueError as exc:
+        report = aggregate(args.sources, args.dataset)
+    except (ConfigError, RunError) as exc:
         print(f"error: {exc}", file=sys.stderr)
-        return 2
-    print(args.dataset)
+        return 2 if isinstance(exc, ConfigError) else 1
+    except KeyboardInterrupt:
+        print("error: interrupted; the dataset is unchanged", file=sys.stderr)
+        return 130
+    print(json.dumps({"dataset": str(args.dataset), "added": len(report.added),
+                      "present": len(report.present), "skipped": len(report.skipped)}))
     return 0
 
 

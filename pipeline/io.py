@@ -1,7 +1,14 @@
-"""Parquet I/O: atomic writes with the resolved config, version and git commit in the schema metadata."""
+"""Parquet I/O: atomic writes, the config in the schema metadata, units in the field metadata.
+
+:data:`COLUMNS` is the column dictionary of every table (README prints it):
+unit and meaning. Design variables and ``param_*`` columns take their unit
+from the mechanism (passed as ``units``). Each file's schema metadata holds
+the resolved config (JSON), the package version and the git commit.
+"""
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import subprocess
@@ -13,10 +20,59 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from pipeline.cache import __version__
+from pipeline.errors import RunError
 
 META_CONFIG = b"pm_design.config"
 META_VERSION = b"pm_design.version"
 META_COMMIT = b"pm_design.git_commit"
+
+#: name -> (unit, meaning); "volume_unit" means the unit named in that row's volume_unit column
+COLUMNS: dict[str, tuple[str, str]] = {
+    "run_id": ("", "unique id of the run: config_hash-launch_id-job (dataset only)"),
+    "launch_id": ("", "the launch (process) that ran it: time_pid_token (dataset only)"),
+    "job": ("", "job number within its launch (dataset only)"),
+    "config_hash": ("", "content hash of the result config (equal studies, equal hash)"),
+    "experiment": ("", "experiment_name of the run"),
+    "mechanism": ("", "mechanism registry name"),
+    "objective": ("", "maximised objective: volume, gdi, suri or mixed"),
+    "w_d": ("1", "weight of the GDI in eta = w_d GDI + (1 - w_d) SURI (seed 000 eq. 36)"),
+    "optimizer": ("", "optimiser registry name"),
+    "seed": ("", "optimiser seed"),
+    "design_id": ("", "index of the sampled design"),
+    "generation": ("", "generation (0 = initial population)"),
+    "best": ("objective_unit", "best objective value in the population"),
+    "mean": ("objective_unit", "mean objective value in the population"),
+    "worst": ("objective_unit", "worst objective value in the population"),
+    "n_evaluations": ("", "objective evaluations (history: new in that generation; best: whole run)"),
+    "restart": ("", "CMA-ES restart index"),
+    "front_size": ("", "non-dominated designs in the NSGA-II population"),
+    "volume": ("volume_unit", "workspace volume V (seed 000 Sec. 4.3; seed 001 eq. 38-39)"),
+    "volume_unit": ("", "unit of volume, e.g. cm³·rad for H4 over (x, y, z, θ)"),
+    "gdi": ("1", "global dexterity index (1/V) ∫ 1/κ dV (seed 000 eq. 36)"),
+    "inverse_condition_min": ("1", "smallest 1/κ in the workspace"),
+    "inverse_condition_max": ("1", "largest 1/κ in the workspace"),
+    "suri": ("1", "space utility ratio V/V*"),
+    "reference_volume": ("volume_unit", "robot size V* of SURI"),
+    "n_samples": ("", "grid nodes evaluated"),
+    "n_inside": ("", "grid nodes inside the workspace"),
+    "valid": ("", "the design could be built (false: infeasible parameters, all zeros)"),
+    "objective_value": ("objective_unit", "value of the run's objective (eta when objective = mixed)"),
+    "objective_unit": ("", "unit of objective_value: volume_unit for volume, 1 otherwise"),
+    "objective_value_refined": ("objective_unit", "objective at refine_factor x the resolution"),
+    "volume_refined": ("volume_unit", "V at refine_factor x the resolution"),
+    "gdi_refined": ("1", "GDI at refine_factor x the resolution"),
+    "resolution": ("", "grid points per sampled axis of the run's evaluations"),
+    "at_bounds": ("", "design variables on a bound of the design box, name=lower|upper"),
+    "optimizer_value": ("objective_unit", "what the configured optimiser found, before polish"),
+    "found_by": ("", "where the reported optimum comes from: the optimiser, polish, or reference"),
+    "polish_improvement": ("objective_unit", "gain of the polish step over the optimiser's result"),
+    "reference_value": ("objective_unit", "reference optimum (CMA-ES + polish); null if not run"),
+    "optimizer_gap": ("1", "relative shortfall of the configured optimiser to the reported optimum"),
+    "flat_variables": ("", "design variables along which the objective is flat at the optimum (the optimum is a set)"),
+    "status": ("", "run status from its manifest: complete"),
+    "wall_time": ("s", "wall time of the run"),
+    "source": ("", "run directory the dataset row was read from"),
+}
 
 
 @lru_cache(maxsize=1)
@@ -33,32 +89,82 @@ def git_commit() -> str:
     return sha + ("-dirty" if dirty else "")
 
 
-def write_parquet(df: pd.DataFrame, path: Path, config: dict) -> Path:
-    """Write ``df`` to ``path`` atomically (temporary file, then rename).
+def column_unit(name: str, units: dict[str, str] | None = None) -> tuple[str, str]:
+    """(unit, meaning) of a column; ``units`` gives the mechanism's design-variable units."""
+    units = units or {}
+    if name in units:
+        return units[name], "design variable or mechanism parameter"
+    if name in COLUMNS:
+        return COLUMNS[name]
+    for suffix, meaning in (("_flat_lower", "lower end of the flat interval"),
+                            ("_flat_upper", "upper end of the flat interval")):
+        if name.endswith(suffix) and name[: -len(suffix)] in units:
+            return units[name[: -len(suffix)]], meaning
+    return "", ""
 
-    The schema metadata carries the resolved config as JSON (keys sorted),
-    the package version and the git commit.
+
+def to_table(df: pd.DataFrame, units: dict[str, str] | None = None) -> pa.Table:
+    """Arrow table of ``df`` with each field's unit and meaning in its metadata."""
+    table = pa.Table.from_pandas(df, preserve_index=False)
+    fields = []
+    for f in table.schema:
+        unit, meaning = column_unit(f.name, units)
+        fields.append(f.with_metadata({b"unit": unit.encode(), b"description": meaning.encode()}))
+    return table.cast(pa.schema(fields, metadata=table.schema.metadata))
+
+
+def write_table(table: pa.Table, path: Path, config: dict | None = None) -> Path:
+    """Write ``table`` to ``path`` atomically (temporary file, then rename).
+
+    Raises
+    ------
+    RunError
+        One line when the file cannot be written (disk full, permission).
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    table = pa.Table.from_pandas(df, preserve_index=False)
     meta = dict(table.schema.metadata or {})
-    meta[META_CONFIG] = json.dumps(config, sort_keys=True).encode()
+    meta.pop(b"pandas", None)
+    if config is not None:
+        meta[META_CONFIG] = json.dumps(config, sort_keys=True, default=str).encode()
     meta[META_VERSION] = __version__.encode()
     meta[META_COMMIT] = git_commit().encode()
     table = table.replace_schema_metadata(meta)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
         pq.write_table(table, tmp)
         os.replace(tmp, path)
+    except OSError as exc:
+        reason = "no space left on device" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
+        raise RunError(f"cannot write {path}: {reason}") from None
     finally:
         if tmp.exists():
             tmp.unlink()
     return path
 
 
+def write_parquet(df: pd.DataFrame, path: Path, config: dict, units: dict[str, str] | None = None) -> Path:
+    """``df`` to ``path`` (atomic), with units and the config (see :func:`write_table`)."""
+    return write_table(to_table(df, units), path, config)
+
+
+def write_text(path: Path, text: str) -> Path:
+    """Write a small text file atomically; :class:`RunError` (one line) if it cannot be written."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        tmp.write_text(text)
+        os.replace(tmp, path)
+    except OSError as exc:
+        if tmp.exists():
+            tmp.unlink()
+        reason = "no space left on device" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
+        raise RunError(f"cannot write {path}: {reason}") from None
+    return path
+
+
 def read_metadata(path: Path) -> dict:
     """``{"config": dict, "version": str, "git_commit": str}`` of a file written here."""
     meta = pq.read_schema(path).metadata or {}
-    return {"config": json.loads(meta[META_CONFIG]), "version": meta[META_VERSION].decode(),
-            "git_commit": meta[META_COMMIT].decode()}
+    return {"config": json.loads(meta[META_CONFIG]) if META_CONFIG in meta else None,
+            "version": meta[META_VERSION].decode(), "git_commit": meta[META_COMMIT].decode()}

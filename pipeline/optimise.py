@@ -1,7 +1,18 @@
-"""Stage 3, optimise: the GA (or DE) for the configured objective and w_d.
+"""Stage 3, optimise: the configured optimiser, then polish, reference and sensitivity probe.
 
-Returns the per-generation history and the optimum with its evaluation at
-the run's resolution and re-evaluated at ``refine_factor`` times it.
+Steps (each optional part set in the optimiser's config):
+
+1. the optimiser (:data:`pipeline.optimizers.OPTIMIZERS`) on the configured
+   objective (a Pareto optimiser on its two objectives; its front member
+   best on the configured objective is taken);
+2. ``polish``: :func:`pipeline.optimizers.polish.polish` from that design;
+3. ``reference``: the reference optimiser (CMA-ES + polish, same seed) to
+   measure how far the configured optimiser stops short;
+4. the best of these is the run's optimum; it is re-evaluated at
+   ``refine_factor`` times the resolution, and probed for flat variables
+   (:func:`pipeline.sensitivity.flat_intervals`).
+
+Designs met twice within a run are evaluated once (an in-run memo).
 """
 
 from __future__ import annotations
@@ -11,92 +22,132 @@ import logging
 import numpy as np
 import pandas as pd
 
-from kinematics import MECHANISMS
-from pipeline.de import differential_evolution
-from pipeline.evaluate import design_objective, evaluate_designs
-from pipeline.ga import genetic_algorithm
-from pipeline.objective import EVALUATION_FIELDS
+from kinematics.workspace import default_resolution
+from pipeline.config import MechanismConfig, ObjectiveConfig
+from pipeline.evaluate import evaluation_frame
+from pipeline.objective import EVALUATION_FIELDS, OBJECTIVES, DesignEvaluator, objective_values
+from pipeline.optimizers import OPTIMIZERS, REFERENCE_OPTIMIZER, OptimizerConfig, Problem
+from pipeline.optimizers.polish import polish
+from pipeline.sensitivity import flat_intervals
 
 log = logging.getLogger(__name__)
 
 
-def optimise_design(mechanism: dict, evaluate: dict, objective: dict, optimizer: dict,
-                    sample: dict | None, code_version: str, table: pd.DataFrame | None = None,
-                    n_jobs: int = 2) -> dict:
-    """Run the optimiser; ``sample`` is given only when seeding from the sampled designs.
+class _MemoEvaluator:
+    """Evaluation rows of designs, each distinct design evaluated once (batch, parallel)."""
 
-    ``table`` is the evaluate stage's output for ``sample`` (not keyed; used to
-    pick the starting designs when ``optimizer.seed_from_samples``).
+    def __init__(self, evaluator: DesignEvaluator) -> None:
+        self.evaluator = evaluator
+        self.memo: dict[bytes, np.ndarray] = {}
+
+    def __call__(self, designs: np.ndarray) -> np.ndarray:
+        keys = [d.tobytes() for d in designs]
+        todo = [k for k in dict.fromkeys(keys) if k not in self.memo]
+        if todo:
+            fresh = self.evaluator.evaluate(np.array([np.frombuffer(k) for k in todo]))
+            self.memo.update(zip(todo, fresh))
+        return np.array([self.memo[k] for k in keys])
+
+
+def optimise_design(mechanism: MechanismConfig, resolution: int | None, refine_factor: int,
+                    objective: ObjectiveConfig, optimizer: OptimizerConfig,
+                    initial: np.ndarray | None = None, n_jobs: int = 1) -> dict:
+    """Run the optimisation of one study.
+
+    Parameters
+    ----------
+    mechanism, objective, optimizer
+        Typed config sections.
+    resolution : int or None
+        Grid resolution of the fitness (None: the mechanism's default).
+    refine_factor : int
+        The optimum is re-evaluated at this multiple of the resolution.
+    initial : ndarray (k, n_design), optional
+        Starting designs (the best sampled ones), used where the optimiser takes them.
 
     Returns
     -------
     dict
-        ``history`` (DataFrame, one row per generation; wall time excluded so
-        the output is a function of the config only), ``best`` (dict of
-        scalars: design variables, mechanism parameters, fitness, evaluation
-        at the run's resolution and ``*_refined`` at ``refine_factor`` x), and
-        ``wall_time`` (list of seconds per generation).
+        ``history`` (DataFrame per generation, wall time removed), ``wall_time``
+        (list of s), ``best`` (dict of scalars: see :func:`_best_row`) and
+        ``front`` (DataFrame of a Pareto optimiser's non-dominated designs, or None).
     """
-    names = list(mechanism["design"]["names"])
-    fitness = design_objective(mechanism, evaluate, objective, n_jobs=n_jobs)
-    lower = np.array(mechanism["design"]["lower"], dtype=float)
-    upper = np.array(mechanism["design"]["upper"], dtype=float)
-    log.info("optimise: computing %s for %s, objective %s, w_d %.3f", optimizer["name"],
-             mechanism["name"], objective["name"], objective["w_d"])
-    initial = None
-    if sample is not None and optimizer["seed_from_samples"]:
-        if table is None:
-            table = evaluate_designs(mechanism, sample, evaluate, code_version, n_jobs=n_jobs)
-        scores = fitness.fitness_of(table[list(EVALUATION_FIELDS)].to_numpy(dtype=float))
-        best_rows = np.argsort(-scores, kind="stable")[: int(optimizer["seed_count"])]
-        initial = table.iloc[best_rows][names].to_numpy()
-    if optimizer["name"] == "ga":
-        result = genetic_algorithm(
-            fitness, lower, upper, population=int(optimizer["population"]),
-            generations=int(optimizer["generations"]), seed=int(optimizer["seed"]),
-            selection_q=float(optimizer["selection_q"]), crossover_rate=float(optimizer["crossover_rate"]),
-            mutation_rate=float(optimizer["mutation_rate"]),
-            mutation_shape=float(optimizer["mutation_shape"]), initial=initial)
+    names = list(mechanism.design.names)
+    lower, upper = np.asarray(mechanism.design.lower), np.asarray(mechanism.design.upper)
+    rows = _MemoEvaluator(DesignEvaluator(mechanism, resolution, n_jobs))
+    scalar = Problem(lambda x: objective_values(objective.name, rows(x), objective.w_d), lower, upper)
+    algorithm = OPTIMIZERS[optimizer.name](optimizer)
+    log.info("optimise: %s on %s, objective %s (w_d %.3g), about %d evaluations", optimizer.name,
+             mechanism.name, objective.name, objective.w_d, algorithm.expected_evaluations())
+    if algorithm.n_objectives == 1:
+        result = algorithm.run(scalar, initial)
+        x, value = result.x, result.fun
+        front = None
     else:
-        result = differential_evolution(fitness, lower, upper, population=int(optimizer["population"]),
-                                        generations=int(optimizer["generations"]),
-                                        seed=int(optimizer["seed"]))
-    history = result.history.rename(columns={f"x{j}": name for j, name in enumerate(names)})
+        pair = list(optimizer.objectives)
+        multi = Problem(lambda x: np.column_stack([objective_values(n, rows(x), objective.w_d) for n in pair]),
+                        lower, upper, n_objectives=len(pair))
+        result = algorithm.run(multi, initial)
+        front_x, front_values = result.front
+        scores = scalar(front_x)
+        x, value = front_x[int(np.argmax(scores))], float(scores.max())
+        front = pd.DataFrame(front_x, columns=names)
+        for k, n in enumerate(pair):
+            front[n] = front_values[:, k]
+        front["objective_value"] = scores
+    optimizer_value, found_by = float(value), optimizer.name
+    polish_improvement = 0.0
+    if optimizer.polish:
+        polished = polish(scalar, x, value, max_evaluations=optimizer.polish_evaluations)
+        polish_improvement = polished.improvement
+        if polished.fun > value:
+            x, value, found_by = polished.x, polished.fun, "polish"
+    reference_value = np.nan
+    if optimizer.reference:
+        ref_cls = OPTIMIZERS[REFERENCE_OPTIMIZER]
+        ref = ref_cls(ref_cls.Config(name=REFERENCE_OPTIMIZER, seed=optimizer.seed)).run(scalar)
+        ref_polished = polish(scalar, ref.x, ref.fun)
+        reference_value = ref_polished.fun
+        log.info("optimise: reference %s + polish %.6g; %s %.6g", REFERENCE_OPTIMIZER, reference_value,
+                 optimizer.name, optimizer_value)
+        if ref_polished.fun > value:
+            x, value, found_by = ref_polished.x, ref_polished.fun, "reference"
+    history = result.history.rename(columns={f"x{j}": n for j, n in enumerate(names)})
     wall_time = history.pop("wall_time").tolist()
+    best = _best_row(mechanism, resolution, refine_factor, objective, x, value, rows)
+    best.update(optimizer_value=optimizer_value, found_by=found_by, polish_improvement=polish_improvement,
+                reference_value=float(reference_value),
+                optimizer_gap=float((value - optimizer_value) / abs(value)) if value else 0.0,
+                n_evaluations=int(scalar.n_evaluations + result.n_evaluations * (algorithm.n_objectives > 1)))
+    best.update(flat_intervals(scalar, x, value, names))
+    return {"history": history, "best": best, "front": front, "wall_time": wall_time}
 
-    best = {name: float(v) for name, v in zip(names, result.x)}
-    params = MECHANISMS[mechanism["name"]].from_design(result.x, **mechanism["fixed"]).params()
-    best.update({f"param_{k}": float(v) for k, v in params.items() if np.isscalar(v)})
-    best["fitness"] = float(result.fun)
-    best["n_evaluations"] = int(result.n_evaluations)
-    base = dict(zip(EVALUATION_FIELDS, fitness.evaluate_batch(result.x[None, :])[0]))
-    factor = int(evaluate["refine_factor"])
-    refined_objective = design_objective(
-        mechanism, {**evaluate, "resolution": _resolution(mechanism, evaluate, result.x)},
-        objective, n_jobs=1, factor=factor)
-    refined = dict(zip(EVALUATION_FIELDS, refined_objective.evaluate_batch(result.x[None, :])[0]))
+
+def _best_row(mechanism: MechanismConfig, resolution: int | None, refine_factor: int,
+              objective: ObjectiveConfig, x: np.ndarray, value: float, rows: _MemoEvaluator) -> dict:
+    """Design, mechanism parameters, evaluation at the run's and at the refined resolution."""
+    names = list(mechanism.design.names)
+    best: dict = {name: float(v) for name, v in zip(names, x)}
+    lower, upper = mechanism.design.lower, mechanism.design.upper
+    best["at_bounds"] = ",".join(f"{n}={'lower' if v <= lo else 'upper'}"
+                                 for n, v, lo, hi in zip(names, x, lower, upper) if v <= lo or v >= hi)
+    mech = mechanism.build(x)
+    for key, v in mech.params().items():
+        if isinstance(v, (int, float, str)) and not isinstance(v, bool):
+            best[f"param_{key}"] = v
+    base = evaluation_frame(rows(x[None, :])).iloc[0]
+    res = resolution or default_resolution(mech, mechanism.orientation_rad())
+    refined_rows = DesignEvaluator(mechanism, res * refine_factor, 1).evaluate(x[None, :])
+    refined = evaluation_frame(refined_rows).iloc[0]
     for field in EVALUATION_FIELDS:
         if field != "valid":
-            best[field] = float(base[field])
-            best[f"{field}_refined"] = float(refined[field])
-    w_d = float(objective["w_d"])
-    best["eta"] = w_d * best["gdi"] + (1.0 - w_d) * best["suri"]
-    best["eta_refined"] = w_d * best["gdi_refined"] + (1.0 - w_d) * best["suri_refined"]
-    best["volume_change_refined"] = _relative_change(best["volume"], best["volume_refined"])
-    best["gdi_change_refined"] = _relative_change(best["gdi"], best["gdi_refined"])
-    return {"history": history, "best": best, "wall_time": wall_time}
-
-
-def _resolution(mechanism: dict, evaluate: dict, design: np.ndarray) -> int:
-    """The run's resolution (explicit, or the mechanism's default for this design)."""
-    if evaluate.get("resolution") is not None:
-        return int(evaluate["resolution"])
-    from kinematics.workspace import default_resolution
-
-    mech = MECHANISMS[mechanism["name"]].from_design(design, **mechanism["fixed"])
-    orientation = mechanism.get("orientation")
-    return default_resolution(mech, None if orientation is None else tuple(orientation))
-
-
-def _relative_change(value: float, refined: float) -> float:
-    return float((refined - value) / value) if value else 0.0
+            best[field] = base[field].item()
+    best["objective_value"] = float(value)
+    best["volume_refined"] = float(refined["volume"])
+    best["gdi_refined"] = float(refined["gdi"])
+    best["objective_value_refined"] = float(objective_values(objective.name, refined_rows, objective.w_d)[0])
+    best["resolution"] = int(res)
+    best["volume_unit"] = mech.volume_unit(mechanism.orientation_rad())
+    unit = OBJECTIVES[objective.name].unit
+    best["objective_unit"] = best["volume_unit"] if unit == "volume" else unit
+    return best

@@ -1,132 +1,157 @@
-"""Stage 5, plot: matplotlib (Agg) PNG figures of a run and of a w_d sweep.
+"""Stage 5, plot: figures of a run and of a sweep (PNG, optionally PDF or SVG).
 
-* ``convergence.png``: best and mean fitness per generation (seed 000 Fig. 7);
-* ``workspace.png``: a 2-D map of the workspace (seed 000 Fig. 5: H4 at
-  theta = 0, coloured by the height of the workspace column; the planar
-  mechanisms at constant orientation as in seed 003 Fig. 8-11 and seed 004;
-  the Tricept's (psi, theta) slice at one c as in seed 001 Fig. 3);
-* ``inverse_condition.png``: 1/kappa on the same slice (seed 000 Fig. 6; for
-  H4 1/kappa does not depend on z, so the map holds for every z);
-* ``tradeoff.png`` (sweeps): GDI, SURI and eta versus w_d (seed 000 Fig. 8).
+* ``convergence.png``: best and mean objective per generation (seed 000 Fig. 7);
+* ``workspace.png``: the mechanism's plot slice (``Mechanism.plot_slice``),
+  coloured by the height of the exactly integrated axis where there is one
+  (H4: z extent, seed 000 Fig. 5);
+* ``inverse_condition.png``: 1/κ on the same slice (seed 000 Fig. 6);
+* ``pareto.png``: the non-dominated designs of a Pareto optimiser;
+* ``tradeoff.png`` (sweeps): GDI, SURI and η of the optima versus w_d, mean
+  and range over seeds (seed 000 Fig. 8).
+
+Figures are built on :class:`matplotlib.figure.Figure` with an Agg canvas,
+never through pyplot's global state, so importing this module does not
+change the backend of a notebook.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+import pandas as pd
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
+from kinematics.base import Mechanism
+from kinematics.workspace import evaluate
 
-from kinematics.base import Mechanism  # noqa: E402
-from kinematics.workspace import Evaluation, evaluate  # noqa: E402
-
-_UNITS = {"h4": "cm", "tricept": "mm", "rpr3": "mm", "rpr2": "mm"}
+#: slice resolution of the workspace figures (grid points per plotted axis)
+SLICE_RESOLUTION = 120
+_SYMBOLS = {"theta": "θ", "psi": "ψ", "phi": "φ", "mixed": "η", "gdi": "GDI", "suri": "SURI", "volume": "V"}
 
 
-def _save(fig, path: Path) -> Path:
+def _figure(width: float, height: float, ncols: int = 1) -> tuple[Figure, np.ndarray]:
+    fig = Figure(figsize=(width, height), layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = np.atleast_1d(fig.subplots(1, ncols, squeeze=False)[0])
+    return fig, axes
+
+
+def _save(fig: Figure, path: Path, plot=None) -> Path:
+    """Write ``path`` (PNG) atomically, plus ``plot.format`` (pdf/svg) beside it."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    dpi = getattr(plot, "dpi", 150)
     tmp = path.with_name(f".{path.stem}.tmp.png")
-    fig.savefig(tmp, dpi=110, bbox_inches="tight")
-    plt.close(fig)
+    fig.savefig(tmp, dpi=dpi)
     tmp.replace(path)
+    extra = getattr(plot, "format", None)
+    if extra:
+        fig.savefig(path.with_suffix(f".{extra}"))
     return path
 
 
-def plot_convergence(history: pd.DataFrame, path: Path, title: str = "") -> Path:
-    """Best and mean fitness per generation (seed 000 Fig. 7)."""
-    fig, ax = plt.subplots(figsize=(6, 4))
+def symbol(name: str) -> str:
+    """Greek symbol of a pose variable or objective (θ, ψ, φ, η), else the name."""
+    return _SYMBOLS.get(name, name)
+
+
+def plot_convergence(history: pd.DataFrame, path: Path, title: str, ylabel: str, plot=None) -> Path:
+    """Best and mean objective per generation (seed 000 Fig. 7)."""
+    fig, (ax,) = _figure(6, 4)
     ax.plot(history["generation"], history["best"], label="best")
-    ax.plot(history["generation"], history["mean"], label="mean", alpha=0.7)
+    ax.plot(history["generation"], history["mean"], label="population mean", alpha=0.7)
     ax.set_xlabel("generation")
-    ax.set_ylabel("fitness")
-    ax.set_title(title or "GA convergence")
-    ax.legend()
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.legend(loc="lower right")
     ax.grid(alpha=0.3)
-    return _save(fig, path)
+    return _save(fig, path, plot)
 
 
-def workspace_slice(mech: Mechanism, orientation: tuple[float, float], min_ic: float,
-                    resolution: int = 120) -> tuple[Evaluation, tuple[int, int], str]:
-    """A 2-D slice of the workspace and the indices of its two plotted pose variables.
-
-    H4: theta fixed at the middle of the range (0 for a symmetric range);
-    3-RPR: phi at the middle of its range; 2-RPR: the plane; Tricept: the
-    (psi, theta) plane at the c with the most workspace.
-    """
-    mid = 0.5 * (orientation[0] + orientation[1])
-    name = mech.name
-    if name == "tricept":
-        coarse = evaluate(mech, orientation=orientation, min_inverse_condition=min_ic,
-                          resolution=16, return_samples=True, error_estimate=False)
-        c_levels = coarse.samples[coarse.inside, 0]
-        lo, hi = mech.pose_bounds(orientation)
-        c_best = float(np.median(c_levels)) if c_levels.size else 0.5 * float(lo[0] + hi[0])
-        ev = evaluate(mech, orientation=orientation, min_inverse_condition=min_ic, fixed={"c": c_best},
-                      resolution=resolution, return_samples=True, error_estimate=False)
-        return ev, (1, 2), f"c = {c_best:.0f} mm"
-    if name == "rpr2":
-        ev = evaluate(mech, min_inverse_condition=min_ic, resolution=resolution * 2,
-                      return_samples=True, error_estimate=False)
-        return ev, (0, 1), ""
-    ev = evaluate(mech, orientation=(mid, mid), min_inverse_condition=min_ic,
-                  resolution=resolution, return_samples=True, error_estimate=False)
-    angle = mech.pose_names[-1]
-    return ev, (0, 1), f"{angle} = {np.degrees(mid):.1f} deg"
-
-
-def plot_workspace(mech: Mechanism, orientation: tuple[float, float], min_ic: float,
-                   directory: Path, title: str = "") -> list[Path]:
-    """``workspace.png`` and ``inverse_condition.png`` of one design."""
-    ev, (i, j), label = workspace_slice(mech, orientation, min_ic)
-    pts = ev.samples
+def plot_workspace(mech: Mechanism, orientation: tuple[float, float], min_ic: float, length: float | None,
+                   directory: Path, what: str, plot=None) -> list[Path]:
+    """``workspace.png`` and ``inverse_condition.png`` of one design on its plot slice."""
+    fixed, (i, j), label = mech.plot_slice(orientation)
+    ev = evaluate(mech, orientation=orientation, min_inverse_condition=min_ic, length=length, fixed=fixed,
+                  resolution=SLICE_RESOLUTION, return_samples=True, error_estimate=False)
+    pts, inside = ev.samples, ev.inside
     names = mech.pose_names
-    unit = _UNITS.get(mech.name, "")
-    axis_label = [f"{n} [{'rad' if mech.angular[k] else unit}]" for k, n in enumerate(names)]
+    axis_label = [f"{symbol(n)} [{'rad' if mech.angular[k] else mech.length_unit}]" for k, n in enumerate(names)]
+    cell = [(pts[:, k].max() - pts[:, k].min()) / max(SLICE_RESOLUTION - 1, 1) for k in (i, j)]
     out = []
-    fig, ax = plt.subplots(figsize=(6, 5))
-    inside = ev.inside
-    if ev.extent is not None:  # H4: colour by the height of the workspace column
-        height = np.where(inside, ev.extent[:, 1] - ev.extent[:, 0], np.nan)
-        sc = ax.scatter(pts[:, i], pts[:, j], c=height, s=6, marker="s", cmap="viridis")
-        fig.colorbar(sc, ax=ax, label=f"z extent [{unit}]")
-    else:
-        ax.scatter(pts[~inside, i], pts[~inside, j], s=2, c="0.9", marker="s")
-        ax.scatter(pts[inside, i], pts[inside, j], s=4, c="tab:blue", marker="s")
-    ax.set_xlabel(axis_label[i])
-    ax.set_ylabel(axis_label[j])
-    ax.set_title(f"{title} workspace {label}\narea {ev.volume:.4g} {ev.volume_unit}".strip())
-    ax.set_aspect("equal" if mech.angular[i] == mech.angular[j] else "auto")
-    out.append(_save(fig, Path(directory) / "workspace.png"))
-
-    fig, ax = plt.subplots(figsize=(6, 5))
-    ic = np.where(inside, ev.inverse_conditions, np.nan)
-    sc = ax.scatter(pts[:, i], pts[:, j], c=ic, s=6, marker="s", cmap="magma", vmin=0)
-    fig.colorbar(sc, ax=ax, label="1/kappa")
-    ax.set_xlabel(axis_label[i])
-    ax.set_ylabel(axis_label[j])
-    ax.set_title(f"{title} 1/kappa {label}".strip())
-    ax.set_aspect("equal" if mech.angular[i] == mech.angular[j] else "auto")
-    out.append(_save(fig, Path(directory) / "inverse_condition.png"))
+    panels = [("workspace", None), ("inverse_condition", ev.inverse_conditions)]
+    for name, values in panels:
+        fig, (ax,) = _figure(6, 5)
+        if name == "workspace" and ev.extent is not None:
+            values = np.where(inside, ev.extent[:, 1] - ev.extent[:, 0], np.nan)
+            bar = f"{symbol(names[2])} extent [{mech.length_unit}]" if len(names) > 2 else "extent"
+            cmap = "viridis"
+        elif name == "workspace":
+            values = np.where(inside, 1.0, np.nan)
+            bar, cmap = None, "Blues"
+        else:
+            values = np.where(inside, values, np.nan)
+            bar, cmap = "1/κ", "magma"
+        # one rectangle per grid cell: visible at any resolution and any axis scale
+        mesh = _cells(ax, pts[:, i], pts[:, j], values, cell, cmap, vmin=0 if name != "workspace" else None)
+        if bar:
+            fig.colorbar(mesh, ax=ax, label=bar)
+        ax.set_xlabel(axis_label[i])
+        ax.set_ylabel(axis_label[j])
+        kind = "workspace" if name == "workspace" else "1/κ"
+        ax.set_title(f"{kind}, {what}" + (f"\n{label}" if label else "")
+                     + (f"; V = {ev.volume:.4g} {ev.volume_unit}" if name == "workspace" else ""))
+        if mech.angular[i] == mech.angular[j]:
+            ax.set_aspect("equal")
+        out.append(_save(fig, Path(directory) / f"{name}.png", plot))
     return out
 
 
-def plot_tradeoff(best: pd.DataFrame, path: Path) -> Path:
-    """GDI, SURI and eta of the optima versus w_d, one panel per mechanism (seed 000 Fig. 8)."""
-    mixed = best[best["objective"].astype(str) == "mixed"].copy()
-    mechanisms = sorted(mixed["mechanism"].astype(str).unique()) or ["(none)"]
-    fig, axes = plt.subplots(1, len(mechanisms), figsize=(5 * len(mechanisms), 4), squeeze=False)
-    for ax, name in zip(axes[0], mechanisms):
-        part = mixed[mixed["mechanism"].astype(str) == name].sort_values("w_d")
-        for column, style in (("gdi", "o-"), ("suri", "s-"), ("eta", "^-")):
-            if len(part):
-                ax.plot(part["w_d"], part[column], style, label=column.upper() if column != "eta" else "eta")
-        ax.set_xlabel("w_d")
-        ax.set_title(name)
+def _cells(ax, x: np.ndarray, y: np.ndarray, values: np.ndarray, cell: list[float], cmap: str, vmin=None):
+    """Regular grid samples as a pcolormesh (NaN transparent)."""
+    xs, ys = np.unique(np.round(x, 12)), np.unique(np.round(y, 12))
+    grid = np.full((ys.size, xs.size), np.nan)
+    grid[np.searchsorted(ys, np.round(y, 12)), np.searchsorted(xs, np.round(x, 12))] = values
+    return ax.pcolormesh(xs, ys, np.ma.masked_invalid(grid), cmap=cmap, vmin=vmin, shading="nearest")
+
+
+def plot_front(front: pd.DataFrame, objectives: list[str], path: Path, what: str, plot=None) -> Path:
+    """The non-dominated designs of a Pareto optimiser in the plane of its two objectives."""
+    fig, (ax,) = _figure(6, 4.5)
+    a, b = objectives
+    order = np.argsort(front[a].to_numpy())
+    ax.plot(front[a].to_numpy()[order], front[b].to_numpy()[order], "o-", ms=4)
+    ax.set_xlabel(f"{symbol(a)} [1]" if a != "volume" else "V")
+    ax.set_ylabel(f"{symbol(b)} [1]" if b != "volume" else "V")
+    ax.set_title(f"Pareto front, {what}")
+    ax.grid(alpha=0.3)
+    return _save(fig, path, plot)
+
+
+def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
+    """GDI, SURI and η of the mixed-index optima versus w_d, one panel per mechanism (seed 000 Fig. 8).
+
+    Runs with the same (mechanism, w_d) (seeds, repeats) are drawn as the mean
+    with a band from their minimum to maximum.
+    """
+    mixed = best[best["objective"].astype(str) == "mixed"]
+    mechanisms = sorted(mixed["mechanism"].astype(str).unique()) or ["(no mixed-index runs)"]
+    fig, axes = _figure(4.5 * len(mechanisms), 3.8, len(mechanisms))
+    for ax, name in zip(axes, mechanisms):
+        part = mixed[mixed["mechanism"].astype(str) == name]
+        stats = part.groupby("w_d")[["gdi", "suri", "objective_value"]].agg(["mean", "min", "max"])
+        for column, label, style in (("gdi", "GDI", "o-"), ("suri", "SURI", "s-"),
+                                     ("objective_value", "η", "^-")):
+            if len(stats):
+                w = stats.index.to_numpy()
+                ax.plot(w, stats[(column, "mean")], style, label=label, ms=4)
+                ax.fill_between(w, stats[(column, "min")], stats[(column, "max")], alpha=0.2)
+        n_runs = part.groupby("w_d").size()
+        ax.set_xlabel("$w_d$")
+        ax.set_ylabel("index [1]")
+        ax.set_title(f"{name}: optima vs $w_d$ (runs per point: {n_runs.max() if len(n_runs) else 0})")
         ax.grid(alpha=0.3)
-        ax.legend()
-    return _save(fig, path)
+        ax.legend(loc="best")
+    return _save(fig, path, plot)

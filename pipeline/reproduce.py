@@ -25,15 +25,13 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 from hydra import compose, initialize_config_dir  # noqa: E402
-from joblib import Memory  # noqa: E402
-from omegaconf import OmegaConf  # noqa: E402
 
 from kinematics import MECHANISMS, get_mechanism  # noqa: E402
 from kinematics.workspace import evaluate  # noqa: E402
-from pipeline.config import register_configs  # noqa: E402
-from pipeline.evaluate import design_objective  # noqa: E402
-from pipeline.objective import EVALUATION_FIELDS  # noqa: E402
-from pipeline.nsga2 import nsga2  # noqa: E402
+from pipeline.cache import cached  # noqa: E402
+from pipeline.config import launch_id, register_configs, validate  # noqa: E402
+from pipeline.objective import DesignEvaluator, objective_values  # noqa: E402
+from pipeline.optimizers.nsga2 import nsga2  # noqa: E402
 from pipeline.plot import plot_convergence, plot_workspace  # noqa: E402
 from pipeline.run import run_study  # noqa: E402
 
@@ -105,7 +103,7 @@ class Reproduction:
         with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
             cfg = compose(config_name="config", overrides=[
                 *overrides, f"paths.output_dir={self.output_dir}", "plot.enabled=false"])
-        run_dir = self.output_dir / "reproduction" / name
+        run_dir = self.output_dir / "reproduction" / launch_id() / name
         paths = run_study(cfg, run_dir)
         best = pd.read_parquet(paths["best"]).iloc[0]
         self.optima[name] = best
@@ -173,7 +171,7 @@ def h4_tables(r: Reproduction) -> dict[str, pd.Series]:
         runs = [r.study(f"h4_{label}_seed{s}".replace("=", ""), [*overrides, f"optimizer.seed={s}"])
                 for s in SEEDS]
         frame = pd.DataFrame([b for b, _ in runs])
-        best_runs[label] = frame.iloc[int(np.argmax(frame["fitness"]))]
+        best_runs[label] = frame.iloc[int(np.argmax(frame["objective_value"]))]
         p = paper[label]
         for key, column in (("V", "volume"), ("ic", "gdi"), ("d", "param_d"), ("h", "param_h"),
                             ("Qz", "param_Qz")):
@@ -222,10 +220,11 @@ be in conflict in our model (see the table above).
 def h4_figures(r: Reproduction, best_runs: dict[str, pd.Series]) -> None:
     b = best_runs["h4_max_volume"]
     mech = get_mechanism("h4", d=b["param_d"], h=b["param_h"], Qz=b["param_Qz"])
-    plot_workspace(mech, mech.default_orientation, 0.01, r.figures, "H4 max V:")
+    plot_workspace(mech, mech.default_orientation, 0.01, None, r.figures, "H4 max V")
     (r.figures / "workspace.png").replace(r.figures / "h4_fig5_workspace.png")
     (r.figures / "inverse_condition.png").replace(r.figures / "h4_fig6_inverse_condition.png")
-    plot_convergence(r.h4_history, r.figures / "h4_fig7_convergence.png", "H4 max V, seed 0")
+    plot_convergence(r.h4_history, r.figures / "h4_fig7_convergence.png", "paper GA convergence (H4, max V, seed 0)",
+                     "V [cm³·rad]")
     r.add(f"""
 ### Fig. 5-7
 
@@ -252,7 +251,7 @@ def h4_sweep(r: Reproduction) -> pd.DataFrame:
     fig, ax1 = plt.subplots(figsize=(7, 4.5))
     ax1.plot(sweep["w_d"], sweep["gdi"], "o-", label="GDI")
     ax1.plot(sweep["w_d"], sweep["suri"], "s-", label="SURI")
-    ax1.plot(sweep["w_d"], sweep["eta"], "^-", label="η")
+    ax1.plot(sweep["w_d"], sweep["objective_value"], "^-", label="η")
     ax1.set_xlabel("w_d")
     ax1.grid(alpha=0.3)
     ax1.legend(loc="upper left")
@@ -265,7 +264,7 @@ def h4_sweep(r: Reproduction) -> pd.DataFrame:
     collapsed = sweep[sweep["volume"] < 0.5 * v0]
     first = float(collapsed["w_d"].min()) if len(collapsed) else None
     rows_t = [[f"{w:.2f}", g, s, e, v] for w, g, s, e, v in
-              zip(sweep["w_d"], sweep["gdi"], sweep["suri"], sweep["eta"], sweep["volume"])]
+              zip(sweep["w_d"], sweep["gdi"], sweep["suri"], sweep["objective_value"], sweep["volume"])]
     volume = sweep["volume"].to_numpy()
     jump = int(np.argmax(np.abs(np.diff(volume))))
     w_a, w_b = float(sweep["w_d"].iloc[jump]), float(sweep["w_d"].iloc[jump + 1])
@@ -310,7 +309,7 @@ def tricept(r: Reproduction) -> None:
                      f"{grid.inverse_condition_min:.2f}-{grid.inverse_condition_max:.2f}"])
     runs = [r.study(f"tricept_max_volume_seed{s}", ["+experiment=tricept_max_volume", f"optimizer.seed={s}"])
             for s in SEEDS[:2]]
-    best = max((b for b, _ in runs), key=lambda b: b["fitness"])
+    best = max((b for b, _ in runs), key=lambda b: b["objective_value"])
     opt = get_mechanism("tricept", a=best["param_a"], b=best["param_b"], d=best["param_d"])
     grid = evaluate(opt, resolution=48, error_estimate=False)
     polar = evaluate(opt, method="polar", resolution=32, error_estimate=False)
@@ -530,7 +529,7 @@ def extensions(r: Reproduction, h4_sweep_table: pd.DataFrame, best_runs: dict[st
         panels[name] = pd.DataFrame(rows)
     fig, axes = plt.subplots(1, 3, figsize=(15, 4))
     for ax, (name, frame) in zip(axes, panels.items()):
-        for col, style in (("gdi", "o-"), ("suri", "s-"), ("eta", "^-")):
+        for col, style in (("gdi", "o-"), ("suri", "s-"), ("objective_value", "^-")):
             ax.plot(frame["w_d"], frame[col], style, label=col)
         ax.set_title(name)
         ax.set_xlabel("w_d")
@@ -538,21 +537,15 @@ def extensions(r: Reproduction, h4_sweep_table: pd.DataFrame, best_runs: dict[st
         ax.grid(alpha=0.3)
     fig.savefig(r.figures / "ext_tradeoff.png", dpi=90, bbox_inches="tight")
     plt.close(fig)
-    ext_rows = [[name, f"{row['w_d']:.2f}", row["gdi"], row["suri"], row["eta"]]
+    ext_rows = [[name, f"{row['w_d']:.2f}", row["gdi"], row["suri"], row["objective_value"]]
                 for name, frame in panels.items() for _, row in frame.iterrows()]
 
     # Pareto front of (GDI, SURI) for H4 by NSGA-II, against the weighted-sum optima
     with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
         cfg = compose(config_name="config", overrides=["+experiment=h4_mixed"])
-    c = OmegaConf.to_container(cfg, resolve=True)
-    objective = design_objective(c["mechanism"], c["evaluate"], c["objective"], n_jobs=2)
-    columns = [EVALUATION_FIELDS.index("gdi"), EVALUATION_FIELDS.index("suri")]
-
-    def both(designs: np.ndarray) -> np.ndarray:
-        return objective.evaluate_batch(designs)[:, columns]
-
-    memo = Memory(str(r.output_dir / "cache"), verbose=0)
-    pareto = memo.cache(_pareto_front, ignore=["both"])(c["mechanism"], c["evaluate"], 40, 40, 0, both)
+    c = validate(cfg)
+    pareto = cached(_pareto_front, str(r.output_dir / "cache"))(c.mechanism, c.evaluate.resolution, 40, 40, 0,
+                                                                 n_jobs=2)
     front = pareto[np.argsort(pareto[:, 1])]
     weighted = h4_sweep_table[["gdi", "suri"]].to_numpy()
     n_distinct = len({(round(g, 3), round(v, 3)) for g, v in weighted})
@@ -588,11 +581,14 @@ def extensions(r: Reproduction, h4_sweep_table: pd.DataFrame, best_runs: dict[st
     sens_span = " and ".join(spans)
 
     # optima re-evaluated at 4x the resolution
-    refined = [[label, row["volume"], row["volume_refined"], f"{100 * row['volume_change_refined']:+.2f} %",
-                row["gdi"], row["gdi_refined"], f"{100 * row['gdi_change_refined']:+.2f} %"]
+    def change(row: pd.Series, name: str) -> float:
+        return row[f"{name}_refined"] / row[name] - 1 if row[name] else 0.0
+
+    refined = [[label, row["volume"], row["volume_refined"], f"{100 * change(row, 'volume'):+.2f} %",
+                row["gdi"], row["gdi_refined"], f"{100 * change(row, 'gdi'):+.2f} %"]
                for label, row in r.optima.items()]
-    worst_v = max(abs(row["volume_change_refined"]) for row in r.optima.values())
-    worst_g = max(abs(row["gdi_change_refined"]) for row in r.optima.values())
+    worst_v = max(abs(change(row, "volume")) for row in r.optima.values())
+    worst_g = max(abs(change(row, "gdi")) for row in r.optima.values())
     r.add(f"""
 ## Extensions
 
@@ -631,12 +627,17 @@ The largest changes are {100 * worst_v:.2f} % in V and {100 * worst_g:.2f} % in 
 """)
 
 
-def _pareto_front(mechanism: dict, evaluate_cfg: dict, population: int, generations: int, seed: int,
-                  both) -> np.ndarray:
+def _pareto_front(mechanism, resolution: int | None, population: int, generations: int, seed: int,
+                  n_jobs: int = 1) -> np.ndarray:
     """Non-dominated (GDI, SURI) points of an NSGA-II run over the config's design box (cached)."""
-    lower = np.array(mechanism["design"]["lower"], dtype=float)
-    upper = np.array(mechanism["design"]["upper"], dtype=float)
-    result = nsga2(both, lower, upper, population=population, generations=generations, seed=seed)
+    evaluator = DesignEvaluator(mechanism, resolution, n_jobs)
+
+    def both(designs: np.ndarray) -> np.ndarray:
+        rows = evaluator.evaluate(designs)
+        return np.column_stack([objective_values(n, rows, 0.5) for n in ("gdi", "suri")])
+
+    result = nsga2(both, np.asarray(mechanism.design.lower), np.asarray(mechanism.design.upper),
+                   population=population, generations=generations, seed=seed)
     return result.objectives[result.front]
 
 
@@ -659,12 +660,13 @@ def _upper_hull(points: np.ndarray) -> np.ndarray:
 # ------------------------------------------------------------------ main
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m pipeline.reproduce", description=__doc__.split("\n")[0])
-    parser.add_argument("--out", type=Path, default=Path("docs"), help="document directory (default docs)")
+    parser.add_argument("--out", type=Path, default=Path("outputs/reproduction"),
+                        help="document directory (default outputs/reproduction; --out docs updates the committed one)")
     parser.add_argument("--output-dir", type=Path, default=Path("outputs"),
                         help="pipeline outputs and cache (default outputs)")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
-    logging.getLogger("pipeline.ga").setLevel(logging.WARNING)
+    logging.getLogger("pipeline.optimizers").setLevel(logging.WARNING)
     counter = _ComputeCounter()
     logging.getLogger().addHandler(counter)
     start = time.perf_counter()

@@ -1,8 +1,23 @@
-"""One study: validate -> sample -> evaluate -> optimise -> write Parquet -> plot.
+"""One study: validate -> sample -> evaluate -> optimise -> Parquet -> plots -> manifest.
 
 ``run_study(cfg, run_dir)`` is what ``python -m pipeline`` calls for every
-run of a launch (Hydra) and what the tests call with a config built by
-Hydra's compose API.
+run of a launch, and what the tests call with a config built by Hydra's
+compose API.
+
+Run lifecycle and identity
+--------------------------
+* the config is checked completely before anything is computed or written;
+* a run directory that already holds a run (a ``manifest.json``) is refused:
+  nothing is ever replaced;
+* ``manifest.json`` is written first with ``status: running`` and rewritten
+  *last* (after the figures) with ``complete`` and the timings, or ``failed``
+  with a one-line reason, or ``interrupted``. Aggregation takes complete
+  runs only;
+* the run id is ``<config_hash>-<launch_id>-<job>``: the content hash of the
+  result config (equal studies share it) plus the launch and job that ran it
+  (different runs never share it). The result tables carry ``config_hash``
+  only, so the same config gives bit-identical Parquet files whatever the
+  workers or the launch; the run id is in the manifest and in the dataset.
 """
 
 from __future__ import annotations
@@ -14,36 +29,39 @@ import time
 from contextlib import contextmanager
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
+from hydra.core.hydra_config import HydraConfig
+from hydra.types import RunMode
 from joblib import parallel_config
-from omegaconf import DictConfig, OmegaConf
+from omegaconf import DictConfig
 
-from kinematics import MECHANISMS
 from pipeline.cache import CODE_VERSION, cached
-from pipeline.config import ConfigError, validate
+from pipeline.config import Config, launch_id, validate
+from pipeline.errors import ConfigError, RunError
 from pipeline.evaluate import evaluate_designs
-from pipeline.io import write_parquet
+from pipeline.io import git_commit, write_parquet, write_text
+from pipeline.objective import EVALUATION_FIELDS, objective_values
 from pipeline.optimise import optimise_design
-from pipeline.plot import plot_convergence, plot_workspace
+from pipeline.plot import plot_convergence, plot_front, plot_workspace
 from pipeline.sample import sample_designs
 
 log = logging.getLogger(__name__)
 
-#: config sections that say how to run, not what to compute; kept out of the
-#: result files so the same study gives bit-identical Parquet whatever the workers
-EXECUTION_SECTIONS = ("parallel", "paths", "plot")
+MANIFEST = "manifest.json"
+TABLES = ("best", "history", "designs", "front")
 
 
 @contextmanager
-def parallel_backend(parallel: dict):
-    """joblib backend of the fitness evaluations (``parallel`` config node)."""
-    if parallel["backend"] == "dask":
+def parallel_backend(parallel):
+    """joblib backend of the fitness evaluations (``parallel`` config section)."""
+    if parallel.backend == "dask":
         from dask.distributed import Client, LocalCluster
 
-        if parallel.get("scheduler_address"):
-            client, cluster = Client(parallel["scheduler_address"]), None
+        if parallel.scheduler_address:
+            client, cluster = Client(parallel.scheduler_address, timeout=10), None
         else:
-            cluster = LocalCluster(n_workers=int(parallel["n_jobs"]), threads_per_worker=1,
+            cluster = LocalCluster(n_workers=int(parallel.n_jobs), threads_per_worker=1,
                                    processes=True, host="127.0.0.1", dashboard_address=None)
             client = Client(cluster)
         try:
@@ -54,110 +72,208 @@ def parallel_backend(parallel: dict):
             if cluster is not None:
                 cluster.close()
     else:
-        with parallel_config(backend=parallel["backend"]):
+        with parallel_config(backend=parallel.backend):
             yield
 
 
-def result_config(cfg: dict) -> dict:
-    """The resolved config without the execution sections (stored in every result file)."""
-    return {k: v for k, v in cfg.items() if k not in EXECUTION_SECTIONS}
+def read_manifest(run_dir: Path) -> dict | None:
+    """The manifest of a run directory, or None (absent or unreadable)."""
+    try:
+        return json.loads((Path(run_dir) / MANIFEST).read_text())
+    except (OSError, ValueError):
+        return None
 
 
-def run_study(cfg: DictConfig | dict, run_dir: Path) -> dict[str, Path]:
+def check_run_dir(run_dir: Path) -> None:
+    """Refuse a directory that already holds a run (one line); results are never replaced."""
+    manifest = read_manifest(run_dir)
+    if manifest is not None or any(Path(run_dir).glob("*.parquet")):
+        held = manifest.get("run_id", "?") if manifest else "results"
+        raise ConfigError(f"hydra.run.dir={str(run_dir)!r} is invalid: it already holds run {held}; "
+                          f"allowed: a new directory (the default makes one per launch)")
+
+
+def run_study(cfg: DictConfig | Config, run_dir: Path, job: int = 0, overrides: list[str] | None = None
+              ) -> dict[str, Path]:
     """Run one study into ``run_dir``; returns the paths written.
 
     Raises
     ------
     ConfigError
-        Before any computation or file, for a value out of range.
+        Before any computation or file, for bad input.
+    RunError
+        When the run fails at run time; the manifest then says ``failed`` and why.
     """
     c = validate(cfg)
     run_dir = Path(run_dir)
-    mech, objective, optimizer = c["mechanism"], c["objective"], c["optimizer"]
-    n_jobs, cache_dir = int(c["parallel"]["n_jobs"]), c["paths"]["cache_dir"]
-    timings: dict[str, float] = {}
-    with parallel_backend(c["parallel"]):
+    check_run_dir(run_dir)
+    run_dir.mkdir(parents=True, exist_ok=True)
+    config = c.result_dict()
+    manifest = {"run_id": f"{c.config_hash()}-{launch_id()}-{job}", "config_hash": c.config_hash(),
+                "launch_id": launch_id(), "job": job, "status": "running", "reason": "",
+                "overrides": list(overrides or []), "code_version": CODE_VERSION, "git_commit": git_commit(),
+                "started": time.strftime("%Y-%m-%dT%H:%M:%S"), "timings": {}, "files": [],
+                "config": config}
+    write_text(run_dir / MANIFEST, json.dumps(manifest, indent=1))
+    try:
+        paths = _compute(c, run_dir, manifest["timings"])
+    except KeyboardInterrupt:
+        manifest.update(status="interrupted", reason="interrupted (Ctrl-C)")
+        _try_write_manifest(run_dir, manifest)
+        raise
+    except Exception as exc:  # any failure is recorded, then reported as one line
+        reason = exc.args[0] if isinstance(exc, RunError) else f"{type(exc).__name__}: {exc}"
+        reason = str(reason).splitlines()[0] if str(reason) else type(exc).__name__
+        manifest.update(status="failed", reason=reason)
+        _try_write_manifest(run_dir, manifest)
+        raise RunError(reason) from exc
+    manifest.update(status="complete", files=sorted(p.name for p in paths.values()),
+                    finished=time.strftime("%Y-%m-%dT%H:%M:%S"))
+    write_text(run_dir / MANIFEST, json.dumps(manifest, indent=1))
+    return paths
+
+
+def _try_write_manifest(run_dir: Path, manifest: dict) -> None:
+    try:
+        write_text(run_dir / MANIFEST, json.dumps(manifest, indent=1))
+    except RunError as exc:  # the disk that failed the run may refuse this too
+        log.error("%s", exc)
+
+
+def _compute(c: Config, run_dir: Path, timings: dict) -> dict[str, Path]:
+    mech, objective, optimizer = c.mechanism, c.objective, c.optimizer
+    n_jobs, cache_dir = c.parallel.n_jobs, c.paths.cache_dir
+    start = time.perf_counter()
+    with parallel_backend(c.parallel):
         t0 = time.perf_counter()
-        designs = cached(sample_designs, cache_dir)(mech, c["sample"], CODE_VERSION)
-        timings["sample"] = time.perf_counter() - t0
+        designs = _stage("sample", sample_designs, cache_dir, mech.design, c.sample)
+        evaluated = _stage("evaluate", evaluate_designs, cache_dir, mech, c.evaluate.resolution, designs,
+                           n_jobs=n_jobs)
+        timings["sample_evaluate"] = time.perf_counter() - t0
+        scores = objective_values(objective.name, evaluated[list(EVALUATION_FIELDS)].to_numpy(float),
+                                  objective.w_d)
+        initial = None
+        if getattr(optimizer, "seed_from_samples", False):
+            order = np.argsort(-scores, kind="stable")[: int(optimizer.seed_count)]
+            initial = evaluated.iloc[order][mech.design.names].to_numpy()
         t0 = time.perf_counter()
-        evaluated = cached(evaluate_designs, cache_dir)(mech, c["sample"], c["evaluate"], CODE_VERSION,
-                                                        designs=designs, n_jobs=n_jobs)
-        timings["evaluate"] = time.perf_counter() - t0
-        t0 = time.perf_counter()
-        seeding = c["sample"] if optimizer["seed_from_samples"] else None
-        optimum = cached(optimise_design, cache_dir)(mech, c["evaluate"], objective, optimizer, seeding,
-                                                     CODE_VERSION, table=evaluated, n_jobs=n_jobs)
+        optimum = _stage("optimise", optimise_design, cache_dir, mech, c.evaluate.resolution,
+                         c.evaluate.refine_factor, objective, optimizer, initial, n_jobs=n_jobs)
         timings["optimise"] = time.perf_counter() - t0
 
-    keys = {"experiment": c["experiment_name"], "mechanism": mech["name"], "objective": objective["name"],
-            "w_d": float(objective["w_d"]), "optimizer": optimizer["name"], "seed": int(optimizer["seed"])}
-    meta = result_config(c)
+    keys = {"config_hash": c.config_hash(), "experiment": c.experiment_name, "mechanism": mech.name,
+            "objective": objective.name, "w_d": float(objective.w_d), "optimizer": optimizer.name,
+            "seed": int(optimizer.seed)}
+    units = {v.name: v.unit for v in mech.cls.design_variables}
+    config = c.result_dict()
     designs_table = evaluated.copy()
-    designs_table["eta"] = keys["w_d"] * designs_table["gdi"] + (1 - keys["w_d"]) * designs_table["suri"]
-    paths = {
-        "designs": write_parquet(_with_keys(designs_table, keys), run_dir / "designs.parquet", meta),
-        "history": write_parquet(_with_keys(optimum["history"], keys), run_dir / "history.parquet", meta),
-        "best": write_parquet(_with_keys(pd.DataFrame([optimum["best"]]), keys),
-                              run_dir / "best.parquet", meta),
-    }
-    (run_dir / "config.yaml").write_text(OmegaConf.to_yaml(OmegaConf.create(c)))
-    timings["generation_wall_time"] = optimum["wall_time"]
-    if c["plot"]["enabled"]:
+    designs_table["objective_value"] = scores
+    tables = {"designs": designs_table, "history": optimum["history"],
+              "best": pd.DataFrame([optimum["best"]])}
+    if optimum["front"] is not None:
+        tables["front"] = optimum["front"]
+    paths = {name: write_parquet(_with_keys(frame, keys), run_dir / f"{name}.parquet", config, units)
+             for name, frame in tables.items()}
+    if c.plot.enabled:
         t0 = time.perf_counter()
         paths.update(_plots(c, optimum, run_dir))
         timings["plot"] = time.perf_counter() - t0
-    (run_dir / "timings.json").write_text(json.dumps(timings, indent=1))
+    timings["total"] = time.perf_counter() - start
+    timings["generation_wall_time"] = optimum["wall_time"][-1] if optimum["wall_time"] else 0.0
     best = optimum["best"]
-    log.info("%s: best fitness %.6g, V %.6g, GDI %.4f, SURI %.4f (refined x%d: V %+.2f %%, GDI %+.2f %%)",
-             c["experiment_name"], best["fitness"], best["volume"], best["gdi"], best["suri"],
-             c["evaluate"]["refine_factor"], 100 * best["volume_change_refined"],
-             100 * best["gdi_change_refined"])
+    log.info("%s: %s %.6g (found by %s; %s alone %.6g, gap %.3g %%), V %.6g %s, GDI %.4f, SURI %.4f",
+             c.experiment_name, objective.name, best["objective_value"], best["found_by"], optimizer.name,
+             best["optimizer_value"], 100 * best["optimizer_gap"], best["volume"], best["volume_unit"],
+             best["gdi"], best["suri"])
     return paths
+
+
+def _stage(name: str, func, cache_dir: str, *args, **kwargs):
+    """Run a cached stage; one log line says whether it was computed or read from the cache."""
+    stage = cached(func, cache_dir)
+    if stage.check_call_in_cache(*args, **kwargs):
+        log.info("%s: cached", name)
+    else:
+        log.info("%s: computing", name)
+    return stage(*args, **kwargs)
 
 
 def _with_keys(frame: pd.DataFrame, keys: dict) -> pd.DataFrame:
     out = frame.copy()
     for k, (name, value) in enumerate(keys.items()):
         out.insert(k, name, value)
-    for name in ("experiment", "mechanism", "objective", "optimizer"):
+    for name in ("config_hash", "experiment", "mechanism", "objective", "optimizer"):
         out[name] = out[name].astype("string")
     out["w_d"] = out["w_d"].astype("float64")
     out["seed"] = out["seed"].astype("int64")
     return out
 
 
-def _plots(c: dict, optimum: dict, run_dir: Path) -> dict[str, Path]:
-    mech_cfg = c["mechanism"]
-    names = mech_cfg["design"]["names"]
-    design = [optimum["best"][n] for n in names]
-    mech = MECHANISMS[mech_cfg["name"]].from_design(design, **mech_cfg["fixed"])
-    orientation = tuple(mech_cfg["orientation"]) if mech_cfg.get("orientation") else mech.default_orientation
-    title = f"{c['experiment_name']}:"
+def _plots(c: Config, optimum: dict, run_dir: Path) -> dict[str, Path]:
+    mech_cfg = c.mechanism
+    design = [optimum["best"][n] for n in mech_cfg.design.names]
+    mech = mech_cfg.build(design)
+    orientation = mech_cfg.orientation_rad() or mech.default_orientation
+    what = f"{mech.name}, {c.objective.name}" + (f", w_d = {c.objective.w_d:g}" if c.objective.name == "mixed"
+                                                 else "")
+    unit = optimum["best"]["objective_unit"]
     out = {"convergence": plot_convergence(optimum["history"], run_dir / "convergence.png",
-                                           f"{title} {c['optimizer']['name']} convergence")}
-    ws, ic = plot_workspace(mech, orientation, float(mech_cfg["min_inverse_condition"]), run_dir, title)
+                                           f"{c.optimizer.name} convergence ({what})",
+                                           f"{c.objective.name} [{unit}]", c.plot)}
+    ws, ic = plot_workspace(mech, orientation, mech_cfg.min_inverse_condition, mech_cfg.length, run_dir,
+                            what, c.plot)
     out.update(workspace=ws, inverse_condition=ic)
+    if optimum["front"] is not None:
+        out["pareto"] = plot_front(optimum["front"], list(c.optimizer.objectives), run_dir / "pareto.png",
+                                   what, c.plot)
     return out
 
 
-def run_from_hydra(cfg: DictConfig, run_dir: str) -> None:
-    """Entry of ``python -m pipeline``: a bad value prints one line and exits 2, writing nothing.
+def remove_if_empty(path: Path, levels: int = 3) -> None:
+    """Hydra creates the run directory (and its parents) before the task starts; remove the
+    empty ones it made (the run directory and up to ``levels - 1`` empty parents)."""
+    for _ in range(levels):
+        try:
+            path.rmdir()
+        except OSError:
+            return
+        path = path.parent
 
-    :func:`run_study` validates before any computation or file, so a
-    ConfigError leaves only the directory Hydra created, which is removed.
-    """
+
+def shutdown_workers() -> None:
+    """End joblib's reusable worker processes (after Ctrl-C, so none outlives the run)."""
     try:
-        run_study(cfg, Path(run_dir))
-    except ConfigError as exc:
-        _remove_if_empty(Path(run_dir))
-        print(f"error: {exc}", file=sys.stderr)
-        sys.exit(2)
+        from joblib.externals.loky import get_reusable_executor
 
-
-def _remove_if_empty(path: Path) -> None:
-    """Hydra creates the run directory before the task starts; leave nothing behind."""
-    try:
-        path.rmdir()
-    except OSError:
+        get_reusable_executor().shutdown(wait=False, kill_workers=True)
+    except Exception:  # noqa: BLE001 - best effort at exit; the process is ending anyway
         pass
+
+
+def run_from_hydra(cfg: DictConfig) -> dict:
+    """The task of ``python -m pipeline``: one run, its failure reported as one line.
+
+    Single run: bad input exits 2, a run-time failure 1, Ctrl-C 130, each with
+    one ``error:`` line and no traceback. In a multirun a run-time failure is
+    returned as the job's status so the other jobs go on
+    (:class:`pipeline.sweeper.CheckedSweeper` sums them up).
+    """
+    hc = HydraConfig.get()
+    run_dir = Path(hc.runtime.output_dir)
+    multirun = hc.mode == RunMode.MULTIRUN
+    job = int(hc.job.num) if multirun else 0
+    try:
+        run_study(cfg, run_dir, job, list(hc.overrides.task))
+        return {"status": "complete", "reason": ""}
+    except (ConfigError, RunError) as exc:
+        if isinstance(exc, ConfigError):
+            remove_if_empty(run_dir)
+        if multirun:
+            log.error("job %d failed: %s", job, exc)
+            return {"status": "failed", "reason": str(exc)}
+        print(f"error: {exc}", file=sys.stderr)
+        sys.exit(2 if isinstance(exc, ConfigError) else 1)
+    except KeyboardInterrupt:
+        shutdown_workers()
+        print(f"error: interrupted; {run_dir} is marked interrupted and will not be aggregated", file=sys.stderr)
+        sys.exit(130)

@@ -9,15 +9,19 @@ import pytest
 from joblib import parallel_config
 from scipy import stats
 
-from pipeline.de import differential_evolution
-from pipeline.ga import (
+from pipeline.config import MechanismConfig
+from pipeline.errors import ConfigError
+from pipeline.objective import OBJECTIVES, DesignEvaluator, objective_values
+from pipeline.optimizers.de import DE, DEConfig
+from pipeline.optimizers.base import Problem
+from pipeline.optimizers.ga import (
+    GAConfig,
     arithmetic_crossover,
     genetic_algorithm,
     geometric_selection_probabilities,
     nonuniform_mutation,
     select,
 )
-from pipeline.objective import DesignObjective
 
 LOWER = np.array([-1.0, -2.0, 0.0])
 UPPER = np.array([1.0, 2.0, 5.0])
@@ -115,31 +119,34 @@ def test_ga_is_a_function_of_the_seed():
     assert not a.history[cols].equals(c.history[cols])
 
 
-def test_ga_logs_one_line_per_generation(caplog):
-    with caplog.at_level(logging.INFO, logger="pipeline.ga"):
-        genetic_algorithm(smooth, LOWER, UPPER, generations=4, seed=0)
-    lines = [r.getMessage() for r in caplog.records if r.name == "pipeline.ga"]
-    assert len(lines) == 4
-    assert "generation 4/4" in lines[-1] and "evaluations/s" in lines[-1] and "ETA" in lines[-1]
+def test_ga_logs_progress_about_every_tenth(caplog):
+    with caplog.at_level(logging.INFO, logger="pipeline.optimizers.base"):
+        genetic_algorithm(smooth, LOWER, UPPER, generations=40, seed=0)
+    lines = [r.getMessage() for r in caplog.records if r.name == "pipeline.optimizers.base"]
+    assert 8 <= len(lines) <= 12
+    assert "generation 40/40" in lines[-1] and "evaluations/s" in lines[-1]
 
 
 def test_bad_ga_arguments():
     with pytest.raises(ValueError, match="lower < upper"):
         genetic_algorithm(smooth, UPPER, LOWER)
-    with pytest.raises(ValueError, match="population must be >= 2"):
-        genetic_algorithm(smooth, LOWER, UPPER, population=1)
+    with pytest.raises(ConfigError, match="optimizer.population"):
+        GAConfig(population=1)
+    with pytest.raises(ConfigError, match="optimizer.selection_q"):
+        GAConfig(selection_q=0.0)
+    with pytest.raises(ConfigError, match="optimizer.mutation_shape"):
+        GAConfig(mutation_shape=float("nan"))
 
 
 # ----------------------------------------------- objective and parallelism
-def tiny_objective(n_jobs: int) -> DesignObjective:
-    return DesignObjective("h4", objective="mixed", w_d=0.5, n_jobs=n_jobs,
-                           options={"resolution": 6})
+H4 = MechanismConfig(name="h4")
 
 
 def run_tiny(n_jobs: int):
-    obj = tiny_objective(n_jobs)
-    lo, hi = obj.bounds
-    return genetic_algorithm(obj, lo, hi, population=8, generations=4, seed=11)
+    evaluator = DesignEvaluator(H4, 6, n_jobs)
+    problem = Problem(lambda x: objective_values("mixed", evaluator.evaluate(x), 0.5),
+                      H4.design.lower, H4.design.upper)
+    return genetic_algorithm(problem, problem.lower, problem.upper, population=8, generations=4, seed=11)
 
 
 def test_ga_bit_identical_across_workers_and_dask():
@@ -159,36 +166,34 @@ def test_ga_bit_identical_across_workers_and_dask():
 
 
 def test_empty_workspace_has_fitness_zero():
-    obj = DesignObjective("rpr3", objective="volume", n_jobs=1,
-                          fixed={"rho_min": 80.0, "rho_max": 160.0})
-    rows = obj.evaluate_batch(np.array([[300.0, 20.0], [200.0, 50.0]]))
-    fit = obj.fitness_of(rows)
+    rpr3 = MechanismConfig(name="rpr3")
+    rows = DesignEvaluator(rpr3, None, 1).evaluate(np.array([[300.0, 20.0], [200.0, 50.0]]))
+    fit = objective_values("volume", rows, 0.0)
     assert fit[0] == 0.0 and fit[1] > 0
     assert not np.isnan(fit).any()
 
 
+def test_infeasible_design_is_invalid_with_zero_objective():
+    rpr2 = MechanismConfig(name="rpr2")  # q_min = 9.6 mm = q_max: the mechanism refuses it
+    rows = DesignEvaluator(rpr2, 64, 1).evaluate(np.array([[5.0, 9.6]]))
+    assert rows[0, -1] == 0 and objective_values("mixed", rows, 0.5)[0] == 0.0
+
+
 def test_objectives_pick_the_right_field():
-    rows = DesignObjective("h4", n_jobs=1, options={"resolution": 6}).evaluate_batch(
-        np.array([[0.13, 0.13, 0.35]]))
-    for name, expect in (("volume", rows[0, 0]), ("gdi", rows[0, 2])):
-        assert DesignObjective("h4", objective=name, n_jobs=1).fitness_of(rows)[0] == expect
-    mixed = DesignObjective("h4", objective="mixed", w_d=0.25, n_jobs=1).fitness_of(rows)[0]
-    assert mixed == pytest.approx(0.25 * rows[0, 2] + 0.75 * rows[0, 7])
-
-
-@pytest.mark.parametrize("kwargs, match", [
-    (dict(mechanism="delta"), "unknown mechanism"),
-    (dict(mechanism="h4", objective="speed"), "objective must be one of"),
-    (dict(mechanism="h4", w_d=1.5), r"w_d must be in \[0, 1\]"),
-    (dict(mechanism="h4", n_jobs=0), "n_jobs must be an integer >= 1"),
-])
-def test_objective_validation(kwargs, match):
-    with pytest.raises(ValueError, match=match):
-        DesignObjective(**kwargs)
+    rows = DesignEvaluator(H4, 12, 1).evaluate(np.array([[0.13, 0.13, 0.35]]))
+    fields = dict(zip(("volume", "gdi", "inverse_condition_min", "inverse_condition_max", "suri"), rows[0]))
+    for name in ("volume", "gdi", "suri"):
+        assert objective_values(name, rows, 0.3)[0] == fields[name]
+    mixed = objective_values("mixed", rows, 0.25)[0]
+    assert mixed == pytest.approx(0.25 * fields["gdi"] + 0.75 * fields["suri"])
+    assert set(OBJECTIVES) == {"volume", "gdi", "suri", "mixed"}
 
 
 def test_de_uses_the_same_budget():
-    result = differential_evolution(smooth, LOWER, UPPER, population=20, generations=40, seed=3)
+    problem = Problem(smooth, LOWER, UPPER)
+    result = DE(DEConfig(population=20, generations=40, seed=3)).run(problem)
     assert result.n_evaluations == 20 * 41
     assert result.fun == pytest.approx(1.0, abs=1e-2)
     assert len(result.history) == 40
+    with pytest.raises(ConfigError, match=r"optimizer.population=3 is invalid: allowed an integer in \[5"):
+        DEConfig(population=3)

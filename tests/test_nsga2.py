@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from pipeline.nsga2 import crowding_distance, non_dominated_ranks, nsga2
+from pipeline.optimizers.nsga2 import crowding_distance, non_dominated_ranks, nsga2
 
 
 def brute_force_ranks(values: np.ndarray) -> np.ndarray:

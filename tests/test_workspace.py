@@ -36,7 +36,7 @@ def test_rpr2_volume_equals_exact_area_at_default_resolution():
     m = get_mechanism("rpr2", **PAPER_DESIGNS["rpr2"])
     ev = evaluate(m, min_inverse_condition=0.0)
     assert ev.volume == pytest.approx(m.exact_area(), rel=1e-3)
-    assert ev.volume_unit == "mm^2"
+    assert ev.volume_unit == "mm²"
 
 
 @pytest.mark.parametrize("degrees", [15, 30, 45, 60])
@@ -45,7 +45,7 @@ def test_rpr3_constant_orientation_area_matches_annuli(degrees):
     phi = math.radians(degrees)
     ev = evaluate(m, orientation=(phi, phi), min_inverse_condition=0.0)
     assert ev.volume == pytest.approx(m.exact_area(phi), rel=5e-3)
-    assert ev.volume_unit == "mm^2"
+    assert ev.volume_unit == "mm²"
 
 
 # -------------------------------------------------------------- H4 exact z
@@ -169,7 +169,7 @@ def test_samples_for_plots():
     assert np.all(ev.samples[:, 3] == 0.0)
     assert np.all(ev.extent[ev.inside, 1] > ev.extent[ev.inside, 0])
     sl = evaluate(m, orientation=(0.0, 0.0), fixed={"z": -20.0}, resolution=20, return_samples=True)
-    assert np.all(sl.samples[:, 2] == -20.0) and sl.volume_unit == "cm^2"
+    assert np.all(sl.samples[:, 2] == -20.0) and sl.volume_unit == "cm²"
 
 
 def test_design_vector_mapping():

@@ -29,47 +29,66 @@ Operators (per generation G = 1..Gmax):
 
 from __future__ import annotations
 
-import logging
-import math
-import time
-from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
-import pandas as pd
 
-log = logging.getLogger(__name__)
-
-FitnessFunction = Callable[[np.ndarray], np.ndarray]
+from pipeline.errors import check, finite
+from pipeline.optimizers.base import History, OptimizationResult, Optimizer, OptimizerConfig, Problem
 
 
 @dataclass
-class OptimizationResult:
-    """Outcome of an optimiser run (in the spirit of ``scipy.optimize.OptimizeResult``).
+class GAConfig(OptimizerConfig):
+    """GAOT settings of seed 000 Sec. 4.5. Paper-faithful: no polish, but a
+    reference optimisation (CMA-ES + polish) records how far the GA stops short."""
 
-    Attributes
-    ----------
-    x : ndarray, shape (n,)
-        Best design found.
-    fun : float
-        Its fitness (maximised).
-    history : pandas.DataFrame
-        One row per generation: ``generation``, ``best``, ``mean``, ``worst``
-        fitness, ``n_evaluations`` (new evaluations in that generation),
-        ``wall_time`` (s since start), and the best design ``x0 .. x{n-1}``.
-    n_evaluations : int
-        Fitness evaluations in total.
-    method : str
-    message : str
-    """
+    name: str = "ga"
+    polish: bool = False
+    reference: bool = True
+    population: int = 30
+    generations: int = 150
+    selection_q: float = 0.08
+    crossover_rate: float = 0.8
+    mutation_rate: float = 0.08
+    mutation_shape: float = 3.0
+    #: start from the best sampled designs (off for paper reproduction)
+    seed_from_samples: bool = False
+    seed_count: int = 5
 
-    x: np.ndarray
-    fun: float
-    history: pd.DataFrame
-    n_evaluations: int
-    method: str
-    message: str = ""
-    extra: dict = field(default_factory=dict)
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check("optimizer.population", self.population, 2 <= self.population <= 100_000,
+              "an integer in [2, 100000]")
+        check("optimizer.generations", self.generations, 1 <= self.generations <= 1_000_000,
+              "an integer in [1, 1000000]")
+        check("optimizer.selection_q", self.selection_q, finite(self.selection_q) and 0 < self.selection_q <= 1,
+              "(0, 1]")
+        for name in ("crossover_rate", "mutation_rate"):
+            value = getattr(self, name)
+            check(f"optimizer.{name}", value, finite(value) and 0 <= value <= 1, "[0, 1]")
+        check("optimizer.mutation_shape", self.mutation_shape,
+              finite(self.mutation_shape) and 0 < self.mutation_shape <= 100, "(0, 100]")
+        check("optimizer.seed_count", self.seed_count, 1 <= self.seed_count <= 100_000,
+              "an integer in [1, 100000] (at most optimizer.population are used)")
+
+
+class GA(Optimizer):
+    """The GAOT real-coded GA (module docstring); ``run`` keeps the operators exactly."""
+
+    name = "ga"
+    Config = GAConfig
+
+    def expected_evaluations(self) -> int:
+        c = self.config
+        return c.population * (c.generations + 1)
+
+    def run(self, problem: Problem, initial: np.ndarray | None = None) -> OptimizationResult:
+        c = self.config
+        return genetic_algorithm(problem, problem.lower, problem.upper, population=c.population,
+                                 generations=c.generations, seed=c.seed, selection_q=c.selection_q,
+                                 crossover_rate=c.crossover_rate, mutation_rate=c.mutation_rate,
+                                 mutation_shape=c.mutation_shape,
+                                 initial=initial if c.seed_from_samples else None)
 
 
 # ------------------------------------------------------------- operators
@@ -130,7 +149,7 @@ def nonuniform_mutation(rng: np.random.Generator, pop: np.ndarray, lower: np.nda
 
 
 # -------------------------------------------------------------- the GA
-def genetic_algorithm(fitness: FitnessFunction, lower: np.ndarray, upper: np.ndarray, *,
+def genetic_algorithm(fitness, lower: np.ndarray, upper: np.ndarray, *,
                       population: int = 30, generations: int = 150, seed: int = 0,
                       selection_q: float = 0.08, crossover_rate: float = 0.8,
                       mutation_rate: float = 0.08, mutation_shape: float = 3.0,
@@ -139,7 +158,7 @@ def genetic_algorithm(fitness: FitnessFunction, lower: np.ndarray, upper: np.nda
 
     Parameters
     ----------
-    fitness : callable, (P, n) -> (P,)
+    fitness : Problem or callable, (P, n) -> (P,)
         Batch fitness; NaN is treated as 0 (an empty workspace has fitness 0).
     lower, upper : array_like, shape (n,)
         Box bounds, ``lower < upper``.
@@ -156,33 +175,19 @@ def genetic_algorithm(fitness: FitnessFunction, lower: np.ndarray, upper: np.nda
     -------
     OptimizationResult
     """
-    lower = np.asarray(lower, dtype=float)
-    upper = np.asarray(upper, dtype=float)
-    _check_ga_arguments(lower, upper, population, generations, selection_q, crossover_rate,
-                        mutation_rate, mutation_shape)
+    problem = fitness if isinstance(fitness, Problem) else Problem(fitness, lower, upper)
+    lower, upper = problem.lower, problem.upper
     rng = np.random.default_rng(seed)
     pop = rng.uniform(lower, upper, size=(population, lower.size))
     if initial is not None:
         initial = np.atleast_2d(np.asarray(initial, dtype=float))[:population]
         pop[: len(initial)] = np.clip(initial, lower, upper)
 
-    start = time.perf_counter()
-    n_evaluations = 0
-
-    def evaluate(x: np.ndarray) -> np.ndarray:
-        nonlocal n_evaluations
-        n_evaluations += x.shape[0]
-        if x.shape[0] == 0:
-            return np.empty(0)
-        values = np.asarray(fitness(x), dtype=float).reshape(-1)
-        if values.shape != (x.shape[0],):
-            raise ValueError(f"fitness must return shape ({x.shape[0]},); got {values.shape}")
-        return np.nan_to_num(values, nan=0.0)
-
-    fit = evaluate(pop)
-    rows = [_history_row(0, fit, pop, population, start)]
+    history = History(generations, "ga: ")
+    start_count = problem.n_evaluations
+    fit = problem(pop)
+    history.record(pop, fit, population)
     for gen in range(1, generations + 1):
-        before = n_evaluations
         best_idx = int(np.argmax(fit))
         elite, elite_fit = pop[best_idx].copy(), fit[best_idx]
         chosen = select(rng, fit, selection_q)
@@ -193,47 +198,11 @@ def genetic_algorithm(fitness: FitnessFunction, lower: np.ndarray, upper: np.nda
         pop = np.clip(pop, lower, upper)
         changed = crossed | mutated
         fit = fit.copy()
-        fit[changed] = evaluate(pop[changed])
+        fit[changed] = problem(pop[changed])
         worst = int(np.argmin(fit))
         pop[worst], fit[worst] = elite, elite_fit
-        rows.append(_history_row(gen, fit, pop, n_evaluations - before, start))
-        _log_generation(gen, generations, fit, n_evaluations, start)
-    history = pd.DataFrame(rows)
+        history.record(pop, fit, int(changed.sum()))
     best = int(np.argmax(fit))
-    return OptimizationResult(x=pop[best].copy(), fun=float(fit[best]), history=history,
-                              n_evaluations=n_evaluations, method="ga",
+    return OptimizationResult(x=pop[best].copy(), fun=float(fit[best]), history=history.frame(),
+                              n_evaluations=problem.n_evaluations - start_count, method="ga",
                               message=f"{generations} generations of {population}")
-
-
-def _history_row(gen: int, fit: np.ndarray, pop: np.ndarray, n_new: int, start: float) -> dict:
-    best = int(np.argmax(fit))
-    row = {"generation": gen, "best": float(fit[best]), "mean": float(fit.mean()),
-           "worst": float(fit.min()), "n_evaluations": int(n_new),
-           "wall_time": time.perf_counter() - start}
-    row.update({f"x{j}": float(v) for j, v in enumerate(pop[best])})
-    return row
-
-
-def _log_generation(gen: int, generations: int, fit: np.ndarray, n_evaluations: int,
-                    start: float) -> None:
-    elapsed = time.perf_counter() - start
-    rate = n_evaluations / elapsed if elapsed > 0 else math.inf
-    eta = elapsed / gen * (generations - gen)
-    log.info("generation %d/%d best %.6g mean %.6g evaluations/s %.1f ETA %.1f s",
-             gen, generations, float(fit.max()), float(fit.mean()), rate, eta)
-
-
-def _check_ga_arguments(lower, upper, population, generations, q, crossover, mutation, shape):
-    if lower.ndim != 1 or lower.shape != upper.shape:
-        raise ValueError(f"lower and upper must be 1-D of the same length; got {lower.shape}, {upper.shape}")
-    if not np.all(np.isfinite(lower) & np.isfinite(upper) & (lower < upper)):
-        raise ValueError("bounds must be finite with lower < upper for every variable")
-    if population < 2:
-        raise ValueError(f"population must be >= 2; got {population}")
-    if generations < 1:
-        raise ValueError(f"generations must be >= 1; got {generations}")
-    for name, value in (("selection_q", q), ("crossover_rate", crossover), ("mutation_rate", mutation)):
-        if not 0.0 <= value <= 1.0 or (name == "selection_q" and value == 0.0):
-            raise ValueError(f"{name} must be in (0, 1] for selection_q, [0, 1] otherwise; got {value}")
-    if not shape > 0:
-        raise ValueError(f"mutation_shape must be > 0; got {shape}")
