@@ -10,7 +10,7 @@ mixed.
 
 Guarantees (tested in ``tests/test_dataset.py``):
 
-* keyed on the run id (``<config_hash>-<launch_id>-<job>``), never on folder
+* keyed on the run id (``<config_hash>-<launch_id>-<job>-<token>``), never on folder
   names: aggregating a run again, by any path, changes nothing; different
   runs never overwrite each other;
 * only runs whose ``manifest.json`` says ``complete`` are taken; the others

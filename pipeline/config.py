@@ -22,13 +22,14 @@ from __future__ import annotations
 import copy
 import dataclasses
 import hashlib
-import importlib.util
 import json
 import math
 import os
 import re
 import secrets
 import socket
+import sys
+import tempfile
 from dataclasses import dataclass, field
 from datetime import datetime
 from functools import lru_cache
@@ -47,6 +48,8 @@ from pipeline.objective import OBJECTIVES
 from pipeline.optimizers import OPTIMIZERS, REFERENCE_OPTIMIZER, OptimizerConfig
 from pipeline.optimizers.base import MAX_SEED
 
+#: the primary config directory (conf/ beside the packages)
+CONFIG_DIR = Path(__file__).resolve().parent.parent / "conf"
 BACKENDS = ("loky", "threading", "multiprocessing", "dask")
 PLOT_FORMATS = ("png", "pdf", "svg")
 #: conservative grid throughput (nodes/s per worker) for the run-time estimate
@@ -363,9 +366,11 @@ def _check_parallel(p: ParallelConfig) -> None:
     """dask installed and its scheduler reachable (within 5 s), before any work."""
     if p.backend != "dask":
         return
-    if importlib.util.find_spec("distributed") is None:
+    try:
+        import distributed  # noqa: F401  (only when the dask backend is asked for)
+    except ImportError:
         raise ConfigError("parallel.backend='dask' is invalid: dask.distributed is not installed "
-                          "(pip install -e \".[dask]\"); allowed without it: loky, threading, multiprocessing")
+                          "(pip install -e \".[dask]\"); allowed without it: loky, threading, multiprocessing") from None
     if p.scheduler_address:
         host, port = p.scheduler_address.split("://", 1)[1].rsplit(":", 1)
         try:
@@ -377,19 +382,78 @@ def _check_parallel(p: ParallelConfig) -> None:
 
 
 def check_writable(field_name: str, path: str | os.PathLike) -> Path:
-    """``path`` is (or can be created as) a writable directory; nothing is created here."""
+    """``path`` is (or can be created as) a writable directory.
+
+    Nothing is left behind: the nearest existing directory is probed with an
+    anonymous temporary file (a permission check alone is not enough: root
+    passes it on read-only or pseudo file systems).
+    """
     p = Path(path).expanduser()
     probe = p
-    while not probe.exists():
+    while not probe.exists() and not probe.is_symlink():
         if probe.parent == probe:
             break
         probe = probe.parent
-    if probe.exists() and not probe.is_dir():
-        raise ConfigError(f"{field_name}={str(path)!r} is invalid: {probe} is a file; allowed: a writable directory")
-    if not os.access(probe, os.W_OK | os.X_OK):
-        raise ConfigError(f"{field_name}={str(path)!r} is invalid: {probe} is not writable; "
+    if not probe.is_dir():
+        raise ConfigError(f"{field_name}={str(path)!r} is invalid: {probe} is not a directory; "
                           f"allowed: a writable directory")
+    try:
+        with tempfile.TemporaryFile(dir=probe):
+            pass
+    except OSError as exc:
+        raise ConfigError(f"{field_name}={str(path)!r} is invalid: {probe} is not writable "
+                          f"({exc.strerror or exc}); allowed: a writable directory") from None
     return p
+
+
+def one_line(exc: BaseException) -> str:
+    """A Hydra or OmegaConf error as one line: its first line, plus the options it lists."""
+    lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+    if not lines:
+        return type(exc).__name__
+    text = lines[0]
+    if any(ln.startswith("Available options") for ln in lines):
+        start = next(k for k, ln in enumerate(lines) if ln.startswith("Available options")) + 1
+        options = [ln for ln in lines[start:] if not ln.startswith(("Config search path", "provider="))]
+        options = [ln.split()[0] for ln in options if ln and ":" not in ln]
+        text += f"; allowed: {', '.join(options)}"
+    elif len(lines) > 1 and not lines[1].startswith(("full_key", "object_type", "reference_type")):
+        text += f": {lines[1]}"
+    elif exc.__cause__ is not None and str(exc.__cause__).strip():
+        text += f": {str(exc.__cause__).strip().splitlines()[0]}"
+    return text
+
+
+def precheck_overrides(argv: list[str]) -> None:
+    """Compose and check a single run's config before Hydra creates anything (one line, exit 2).
+
+    Catches composition errors (unknown group option, bad type), every
+    :func:`validate` error, an unwritable or already used ``hydra.run.dir``.
+
+    Skipped when any Hydra flag is given (``-m``, ``--help``, ...): Hydra
+    handles those, and a sweep's jobs are checked by the sweeper.
+    """
+    if any(arg.startswith("-") for arg in argv):
+        return
+    from hydra import compose, initialize_config_dir
+    from hydra.errors import HydraException
+
+    from pipeline.run import check_run_dir
+
+    register_configs()
+    try:
+        with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3", job_name="pm-design"):
+            cfg = compose(config_name="config", overrides=list(argv), return_hydra_config=True)
+        validate(cfg)
+        run_dir = Path(cfg.hydra.run.dir)
+        check_writable("hydra.run.dir", run_dir)
+        check_run_dir(run_dir)
+    except ConfigError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        sys.exit(2)
+    except (HydraException, OmegaConfBaseException, ValueError) as exc:
+        print(f"error: {one_line(exc)}", file=sys.stderr)
+        sys.exit(2)
 
 
 # ------------------------------------------------------------- registration

@@ -28,7 +28,7 @@ META_COMMIT = b"pm_design.git_commit"
 
 #: name -> (unit, meaning); "volume_unit" means the unit named in that row's volume_unit column
 COLUMNS: dict[str, tuple[str, str]] = {
-    "run_id": ("", "unique id of the run: config_hash-launch_id-job (dataset only)"),
+    "run_id": ("", "unique id of the run: config_hash-launch_id-job-token (dataset only)"),
     "launch_id": ("", "the launch (process) that ran it: time_pid_token (dataset only)"),
     "job": ("", "job number within its launch (dataset only)"),
     "config_hash": ("", "content hash of the result config (equal studies, equal hash)"),

@@ -13,9 +13,10 @@ Run lifecycle and identity
   *last* (after the figures) with ``complete`` and the timings, or ``failed``
   with a one-line reason, or ``interrupted``. Aggregation takes complete
   runs only;
-* the run id is ``<config_hash>-<launch_id>-<job>``: the content hash of the
-  result config (equal studies share it) plus the launch and job that ran it
-  (different runs never share it). The result tables carry ``config_hash``
+* the run id is ``<config_hash>-<launch_id>-<job>-<token>``: the content hash
+  of the result config (equal studies share it), the launch and job that ran
+  it, and a random token, so different runs never share it even when one
+  process runs the same study twice. The result tables carry ``config_hash``
   only, so the same config gives bit-identical Parquet files whatever the
   workers or the launch; the run id is in the manifest and in the dataset.
 """
@@ -24,6 +25,7 @@ from __future__ import annotations
 
 import json
 import logging
+import secrets
 import sys
 import time
 from contextlib import contextmanager
@@ -109,7 +111,9 @@ def run_study(cfg: DictConfig | Config, run_dir: Path, job: int = 0, overrides: 
     check_run_dir(run_dir)
     run_dir.mkdir(parents=True, exist_ok=True)
     config = c.result_dict()
-    manifest = {"run_id": f"{c.config_hash()}-{launch_id()}-{job}", "config_hash": c.config_hash(),
+    # the token keeps two runs of one launch and job apart (API use: tests, notebooks, reproduce)
+    run_id = f"{c.config_hash()}-{launch_id()}-{job}-{secrets.token_hex(3)}"
+    manifest = {"run_id": run_id, "config_hash": c.config_hash(),
                 "launch_id": launch_id(), "job": job, "status": "running", "reason": "",
                 "overrides": list(overrides or []), "code_version": CODE_VERSION, "git_commit": git_commit(),
                 "started": time.strftime("%Y-%m-%dT%H:%M:%S"), "timings": {}, "files": [],

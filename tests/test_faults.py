@@ -1,0 +1,318 @@
+"""Fault and bad-input table through the real CLI (``python -m pipeline``), at tiny sizes.
+
+Every case asserts the exit status, that stderr is one ``error:`` line with
+no traceback, and what is on disk afterwards (nothing, or the earlier
+results untouched). Cases that need a run to fail *during* computation
+(disk full, a job failing mid-sweep, Ctrl-C) are at the end.
+"""
+
+from __future__ import annotations
+
+import errno
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+TINY = ["+debug=fast", "optimizer.population=4", "optimizer.generations=2"]
+
+
+def run_cli(args: list[str], out: Path, module: str = "pipeline", timeout: float = 300
+            ) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", module, *args], cwd=ROOT, capture_output=True, text=True,
+                          timeout=timeout, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+
+
+def files_under(path: Path) -> list[Path]:
+    return sorted(p for p in path.rglob("*") if p.is_file()) if path.exists() else []
+
+
+def assert_one_error_line(proc: subprocess.CompletedProcess, pattern: str = "") -> str:
+    err = proc.stderr.strip()
+    assert "Traceback" not in proc.stderr, proc.stderr
+    assert err.startswith("error: ") and "\n" not in err, err
+    if pattern:
+        assert pattern in err, err
+    return err
+
+
+@pytest.fixture(scope="module")
+def existing_run(tmp_path_factory) -> Path:
+    """A complete run made through the CLI, to check that nothing replaces it."""
+    base = tmp_path_factory.mktemp("existing")
+    run_dir = base / "run"
+    proc = run_cli(["+experiment=rpr2_mixed", *TINY, f"paths.output_dir={base}", f"hydra.run.dir={run_dir}"], base)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    return run_dir
+
+
+# (case id, overrides, field named in the one-line error)
+SINGLE_RUN_REFUSALS = [
+    ("w_d above 1", ["objective.w_d=2"], "objective.w_d"),
+    ("w_d below 0", ["objective.w_d=-0.1"], "objective.w_d"),
+    ("w_d NaN", ["objective.w_d=nan"], "objective.w_d"),
+    ("w_d inf", ["objective.w_d=inf"], "objective.w_d"),
+    ("w_d not a number", ["objective.w_d=abc"], "objective.w_d"),
+    ("unknown objective name", ["objective.name=speed"], "objective.name"),
+    ("unknown objective option", ["objective=speed"], "objective/speed"),
+    ("typo key w_d", ["+objective.wd=0.9"], "objective.wd"),
+    ("unknown top-level key", ["+foo=1"], "foo"),
+    ("misspelt key without +", ["evaluate.resolutoin=3"], "resolutoin"),
+    ("unknown mechanism option", ["mechanism=delta"], "mechanism/delta"),
+    ("unknown mechanism name", ["mechanism.name=delta"], "mechanism.name"),
+    ("schema is no option", ["mechanism=schema"], "mechanism/schema"),
+    ("unknown optimizer option", ["optimizer=pso"], "optimizer/pso"),
+    ("optimizer name without its group", ["optimizer.name=de"], "optimizer.name"),
+    ("ga population 1", ["optimizer.population=1"], "optimizer.population"),
+    ("ga generations 0", ["optimizer.generations=0"], "optimizer.generations"),
+    ("selection q 0", ["optimizer.selection_q=0"], "optimizer.selection_q"),
+    ("selection q above 1", ["optimizer.selection_q=1.5"], "optimizer.selection_q"),
+    ("crossover rate negative", ["optimizer.crossover_rate=-0.1"], "optimizer.crossover_rate"),
+    ("mutation rate 2", ["optimizer.mutation_rate=2"], "optimizer.mutation_rate"),
+    ("mutation shape -1", ["optimizer.mutation_shape=-1"], "optimizer.mutation_shape"),
+    ("mutation shape NaN", ["optimizer.mutation_shape=nan"], "optimizer.mutation_shape"),
+    ("optimizer seed -1", ["optimizer.seed=-1"], "optimizer.seed"),
+    ("optimizer seed too large", ["optimizer.seed=99999999999"], "optimizer.seed"),
+    ("seed count 0", ["optimizer.seed_count=0"], "optimizer.seed_count"),
+    ("de population 3", ["optimizer=de", "optimizer.population=3"], "optimizer.population"),
+    ("de mutation 2.5", ["optimizer=de", "optimizer.mutation=2.5"], "optimizer.mutation"),
+    ("cmaes sigma 0", ["optimizer=cmaes", "optimizer.sigma0=0"], "optimizer.sigma0"),
+    ("cmaes budget 5", ["optimizer=cmaes", "optimizer.max_evaluations=5"], "optimizer.max_evaluations"),
+    ("nsga2 same objective twice", ["optimizer=nsga2", "optimizer.objectives=[gdi,gdi]"], "optimizer.objectives"),
+    ("nsga2 unknown objective", ["optimizer=nsga2", "optimizer.objectives=[gdi,speed]"], "optimizer.objectives"),
+    ("polish budget 0", ["optimizer.polish_evaluations=0"], "optimizer.polish_evaluations"),
+    ("sample seed -1", ["sample.seed=-1"], "sample.seed"),
+    ("sample n 0", ["sample.n=0"], "sample.n"),
+    ("resolution 1 (too coarse)", ["evaluate.resolution=1"], "evaluate.resolution"),
+    ("resolution 0", ["evaluate.resolution=0"], "evaluate.resolution"),
+    ("resolution 1e9 (memory)", ["evaluate.resolution=1000000000"], "evaluate.resolution"),
+    ("resolution 10000 (node budget)", ["evaluate.resolution=10000"], "evaluate.resolution"),
+    ("resolution over the time budget", ["evaluate.resolution=39", "evaluate.max_hours=0.01"], "evaluate.resolution"),
+    ("rpr2 resolution below its minimum", ["mechanism=rpr2", "evaluate.resolution=20"], "evaluate.resolution"),
+    ("refine factor 0", ["evaluate.refine_factor=0"], "evaluate.refine_factor"),
+    ("max hours 0", ["evaluate.max_hours=0"], "evaluate.max_hours"),
+    ("n_jobs 0", ["parallel.n_jobs=0"], "parallel.n_jobs"),
+    ("unknown backend", ["parallel.backend=mpi"], "parallel.backend"),
+    ("malformed scheduler address", ["parallel.scheduler_address=somewhere"], "parallel.scheduler_address"),
+    ("unreachable dask scheduler", ["parallel.backend=dask", "parallel.scheduler_address=tcp://127.0.0.1:1"],
+     "parallel.scheduler_address"),
+    ("experiment name escaping", ["experiment_name=a/../../x"], "experiment_name"),
+    ("experiment name empty", ["experiment_name="], "experiment_name"),
+    ("design bounds crossed", ["mechanism.design.lower=[0.2,0.01,0.35]"], "mechanism.design bounds of d_ratio"),
+    ("design bounds length", ["mechanism.design.lower=[0.1]"], "mechanism.design.lower"),
+    ("design names changed", ["mechanism.design.names=[a,b,c]"], "mechanism.design.names"),
+    ("orientation reversed", ["mechanism.orientation=[10,-10]"], "mechanism.orientation"),
+    ("dexterity limit 1", ["mechanism.min_inverse_condition=1"], "mechanism.min_inverse_condition"),
+    ("homogenising length negative", ["mechanism.length=-1"], "mechanism.length"),
+    ("stroke negative", ["mechanism.fixed.stroke=-5"], "mechanism.fixed"),
+    ("tricept cone 200 deg", ["mechanism=tricept", "mechanism.fixed.cone=200"], "mechanism.fixed"),
+    ("unknown fixed parameter", ["+mechanism.fixed.foo=1"], "mechanism.fixed.foo"),
+    ("unknown H4 base reading", ["mechanism.fixed.base=bogus"], "mechanism.fixed"),
+    ("plot dpi 10", ["plot.dpi=10"], "plot.dpi"),
+    ("plot format gif", ["plot.format=gif"], "plot.format"),
+    ("output dir unwritable", ["paths.output_dir=/sys/pm-design-test"], "paths.output_dir"),
+    ("run dir unwritable", ["hydra.run.dir=/sys/pm-design-run"], "hydra.run.dir"),
+]
+
+
+@pytest.mark.parametrize("overrides, field", [c[1:] for c in SINGLE_RUN_REFUSALS],
+                         ids=[c[0] for c in SINGLE_RUN_REFUSALS])
+def test_single_run_refusal(overrides, field, tmp_path):
+    out = tmp_path / "out"
+    proc = run_cli(["+experiment=h4_mixed", f"paths.output_dir={out}", *overrides], out)
+    assert proc.returncode == 2, proc.stderr
+    assert_one_error_line(proc, field)
+    assert files_under(out) == [] and not out.exists(), files_under(out)
+
+
+@pytest.mark.parametrize("target", ["output_dir", "cache_dir", "dataset_dir"])
+def test_path_that_is_a_file_is_refused(target, tmp_path):
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a directory")
+    out = tmp_path / "out"
+    args = [f"paths.output_dir={out}", f"paths.{target}={blocker}/sub"]
+    proc = run_cli(["+experiment=h4_mixed", *TINY, *args], out)
+    assert proc.returncode == 2
+    assert_one_error_line(proc, f"paths.{target}")
+    assert blocker.read_text() == "not a directory" and not out.exists()
+
+
+def test_dask_not_installed_is_one_line(tmp_path):
+    """Run with an interpreter flag that hides the dask packages."""
+    out = tmp_path / "out"
+    shim = tmp_path / "shim"
+    shim.mkdir()
+    (shim / "sitecustomize.py").write_text(
+        "import importlib.abc, sys\n"
+        "class _Hide(importlib.abc.MetaPathFinder):\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name.split('.')[0] in ('distributed', 'dask'):\n"
+        "            raise ModuleNotFoundError(f'No module named {name!r}', name=name)\n"
+        "sys.meta_path.insert(0, _Hide())\n")
+    env = {**os.environ, "PYTHONPATH": str(shim)}
+    proc = subprocess.run([sys.executable, "-m", "pipeline", "+experiment=h4_mixed", *TINY,
+                           f"paths.output_dir={out}", "parallel.backend=dask"], cwd=ROOT, capture_output=True,
+                          text=True, env=env, timeout=120)
+    assert proc.returncode == 2
+    assert_one_error_line(proc, "parallel.backend")
+    assert not out.exists()
+
+
+def test_reused_run_dir_is_refused_and_kept(existing_run, tmp_path):
+    before = {p: p.read_bytes() for p in files_under(existing_run)}
+    proc = run_cli(["+experiment=rpr2_mixed", *TINY, f"paths.output_dir={tmp_path}",
+                    f"hydra.run.dir={existing_run}", "objective.w_d=0.9"], tmp_path)
+    assert proc.returncode == 2
+    assert_one_error_line(proc, "hydra.run.dir")
+    assert {p: p.read_bytes() for p in files_under(existing_run)} == before
+
+
+def test_sweep_with_one_bad_job_is_refused_before_any_job_runs(tmp_path):
+    out = tmp_path / "out"
+    proc = run_cli(["-m", "+experiment=h4_mixed", *TINY, f"paths.output_dir={out}", "objective.w_d=0,2,1"], out)
+    assert proc.returncode == 2
+    err = assert_one_error_line(proc, "job 1 (")
+    assert "objective.w_d=2" in err
+    assert files_under(out) == [], files_under(out)
+
+
+def test_sweep_with_an_unknown_option_is_refused_before_any_job_runs(tmp_path):
+    out = tmp_path / "out"
+    proc = run_cli(["-m", "+experiment=h4_mixed", *TINY, f"paths.output_dir={out}", "mechanism=h4,delta"], out)
+    assert proc.returncode != 0
+    assert "Traceback" not in proc.stderr
+    assert not any(p.suffix == ".parquet" for p in files_under(out))
+
+
+def test_reused_sweep_dir_is_refused(tmp_path):
+    sweep = tmp_path / "sweep"
+    sweep.mkdir()
+    (sweep / "old.txt").write_text("earlier sweep")
+    proc = run_cli(["-m", "+experiment=h4_mixed", *TINY, f"paths.output_dir={tmp_path}",
+                    f"hydra.sweep.dir={sweep}", "objective.w_d=0,1"], tmp_path)
+    assert proc.returncode == 2
+    assert_one_error_line(proc, "hydra.sweep.dir")
+    assert [p.name for p in sweep.iterdir()] == ["old.txt"]
+
+
+@pytest.mark.parametrize("args, pattern, code", [
+    (["{missing}"], "source", 2),
+    (["{run}", "--dataset", "{file}"], "--dataset", 2),
+    (["{run}", "--dataset", "/sys/pm-design-dataset"], "--dataset", 2),
+    (["{run}", "--dataset", "{foreign}"], "--dataset", 2),
+])
+def test_aggregate_cli_refusals(args, pattern, code, existing_run, tmp_path):
+    file = tmp_path / "f.txt"
+    file.write_text("x")
+    foreign = tmp_path / "foreign"
+    foreign.mkdir()
+    (foreign / "notes.txt").write_text("mine")
+    values = {"missing": tmp_path / "nope", "run": existing_run, "file": file, "foreign": foreign}
+    proc = run_cli([a.format(**values) for a in args], tmp_path, module="pipeline.aggregate")
+    assert proc.returncode == code
+    assert_one_error_line(proc, pattern)
+    assert file.read_text() == "x" and [p.name for p in foreign.iterdir()] == ["notes.txt"]
+
+
+# ------------------------------------------------- failures while computing
+def test_ctrl_c_stops_with_one_line_and_no_workers_left(tmp_path):
+    out = tmp_path / "out"
+    proc = subprocess.Popen([sys.executable, "-m", "pipeline", "+experiment=h4_mixed", f"paths.output_dir={out}",
+                             "sample.n=8", "optimizer.generations=100", "plot.enabled=false"],
+                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    deadline = time.time() + 120
+    manifest = None
+    while time.time() < deadline:
+        manifests = list(out.rglob("manifest.json"))
+        if manifests and list((out / "cache").rglob("*.pkl")):  # a stage finished: the GA is running
+            manifest = manifests[0]
+            break
+        time.sleep(0.2)
+    assert manifest is not None, "the run did not start"
+    time.sleep(1.0)
+    os.killpg(proc.pid, signal.SIGINT)
+    _, stderr = proc.communicate(timeout=60)
+    assert proc.returncode == 130, stderr
+    assert "Traceback" not in stderr
+    errors = [ln for ln in stderr.splitlines() if ln.startswith("error:")]
+    assert len(errors) == 1 and "interrupted" in errors[0]
+    assert json.loads(manifest.read_text())["status"] == "interrupted"
+    assert not list(manifest.parent.glob("best.parquet"))
+    time.sleep(1.0)
+    assert _processes_in_session(proc.pid) == []
+
+
+def _processes_in_session(sid: int) -> list[int]:
+    alive = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[3]) == sid and fields[0] != "Z":  # session id; zombies are already dead
+            alive.append(int(stat.parent.name))
+    return alive
+
+
+def _hydra_main(monkeypatch, argv: list[str]) -> int:
+    """Run the CLI's Hydra app in this process (to inject a fault); returns the exit code."""
+    from pipeline.__main__ import main
+
+    monkeypatch.setattr(sys, "argv", ["pipeline", *argv])
+    try:
+        main()
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    return 0
+
+
+def test_disk_full_marks_no_run_complete(monkeypatch, tmp_path, capsys):
+    import pyarrow.parquet as pq
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(pq, "write_table", full)
+    out = tmp_path / "out"
+    code = _hydra_main(monkeypatch, ["+experiment=rpr2_mixed", *TINY, f"paths.output_dir={out}",
+                                     f"hydra.run.dir={out}/run"])
+    err = capsys.readouterr().err
+    assert code == 1
+    line = [ln for ln in err.splitlines() if ln.startswith("error:")]
+    assert len(line) == 1 and "no space left on device" in line[0]
+    manifest = json.loads((out / "run" / "manifest.json").read_text())
+    assert manifest["status"] == "failed" and "no space left" in manifest["reason"]
+    assert not list((out / "run").glob("*.parquet"))
+
+
+def test_a_job_failing_at_run_time_does_not_lose_the_sweep(monkeypatch, tmp_path, capsys):
+    import pipeline.run as run_module
+
+    real = run_module.optimise_design
+
+    def flaky(mechanism, resolution, refine_factor, objective, optimizer, initial=None, n_jobs=1):
+        if objective.w_d == 0.5:
+            raise MemoryError("simulated out of memory")
+        return real(mechanism, resolution, refine_factor, objective, optimizer, initial, n_jobs)
+
+    monkeypatch.setattr(run_module, "optimise_design", flaky)
+    out = tmp_path / "out"
+    code = _hydra_main(monkeypatch, ["-m", "+experiment=rpr2_mixed", *TINY, f"paths.output_dir={out}",
+                                     "objective.w_d=0,0.5,1"])
+    err = capsys.readouterr().err
+    assert code == 1
+    line = [ln for ln in err.splitlines() if ln.startswith("error:")]
+    assert len(line) == 1 and line[0].startswith("error: 2 of 3 jobs completed; failed: job 1")
+    assert "MemoryError: simulated out of memory" in line[0]
+    best = pd.read_parquet(out / "dataset" / "best")
+    assert sorted(best["w_d"]) == [0.0, 1.0]
+    statuses = sorted(json.loads(p.read_text())["status"] for p in out.rglob("manifest.json"))
+    assert statuses == ["complete", "complete", "failed"]
