@@ -12,16 +12,21 @@ import time
 
 import numpy as np
 
-from pipeline.ga import genetic_algorithm
-from pipeline.objective import DesignObjective
+from pipeline.config import MechanismConfig
+from pipeline.objective import DesignEvaluator, objective_values
+from pipeline.optimizers.base import Problem
+from pipeline.optimizers.ga import genetic_algorithm
 
 
 def run(n_jobs: int, w_d: float, seed: int):
-    objective = DesignObjective("h4", objective="mixed", w_d=w_d, n_jobs=n_jobs)
-    lower, upper = objective.bounds
-    objective(np.vstack([lower, upper]))  # start the workers outside the timing
+    # the design box of the pipeline's config (the class's, unless overridden)
+    mechanism = MechanismConfig(name="h4")
+    evaluator = DesignEvaluator(mechanism, None, n_jobs)
+    problem = Problem(lambda x: objective_values("mixed", evaluator.evaluate(x), w_d),
+                      mechanism.design.lower, mechanism.design.upper)
+    evaluator.evaluate(np.vstack([problem.lower, problem.upper]))  # start the workers outside the timing
     t0 = time.perf_counter()
-    result = genetic_algorithm(objective, lower, upper, seed=seed)
+    result = genetic_algorithm(problem, problem.lower, problem.upper, seed=seed)
     return time.perf_counter() - t0, result
 
 

@@ -13,28 +13,11 @@ Public API
 
 from __future__ import annotations
 
-import importlib
-import pkgutil
-
 from kinematics.base import Mechanism
+from kinematics.registry import discover
 
 
-def _discover() -> dict[str, type[Mechanism]]:
-    for info in pkgutil.iter_modules(__path__):
-        if not info.name.startswith("_"):
-            importlib.import_module(f"{__name__}.{info.name}")
-    found: dict[str, type[Mechanism]] = {}
-    stack = list(Mechanism.__subclasses__())
-    while stack:
-        cls = stack.pop()
-        stack.extend(cls.__subclasses__())
-        name = getattr(cls, "name", None)
-        if isinstance(name, str):
-            found[name] = cls
-    return dict(sorted(found.items()))
-
-
-MECHANISMS: dict[str, type[Mechanism]] = _discover()
+MECHANISMS: dict[str, type[Mechanism]] = discover(__name__, __path__, Mechanism)
 
 
 def get_mechanism(name: str, **params: object) -> Mechanism:

@@ -37,6 +37,15 @@ Geometry (seed 000 eq. 13-16, generalised from the example eq. 25)
   proportions the paper gives, at every size.
 * Ball-joint limit ``ball_joint_limit`` (deg, optional): the largest angle
   between a rod and the vertical; ``None`` (the paper states none) disables it.
+* Homogenising length ``homogenising`` (Sec. 4.2 says only "the length of the
+  first link"): ``"h"`` (default: |BC_i|, the lever arm of θ, so 1/κ does not
+  depend on the plate's scale), ``"d"``, ``"rod"`` (M_1 = sqrt(3) Qz) or
+  ``"none"`` (1 cm: the angular column left as printed in eq. 33). A number
+  can still be given as the pipeline's ``mechanism.length``.
+* Robot size ``v_star`` (Sec. 4.3: "the base area times the reach"):
+  ``"prism_theta"`` (default: base area x z reach x θ range, so SURI is
+  dimensionless for a 4-D volume in cm³·rad) or ``"prism"`` (base area x z
+  reach, cm³, as printed; SURI then carries rad).
 * Actuator range ``0 <= q_i <= stroke`` (Delta q, default 100 cm, see
   :attr:`H4.actuator_range`).
 """
@@ -64,6 +73,8 @@ _EQ25_BASE = np.array([[-48.0, -48.0], [-48.0, 48.0], [6.0, 48.0], [48.0, -6.0]]
 _EQ25_QZ = 42.0
 #: readings of how the base points and rods follow (d, h, Qz); see the module docstring
 BASE_READINGS = ("scaled", "tracking", "fixed")
+HOMOGENISING_READINGS = ("h", "d", "rod", "none")
+V_STAR_READINGS = ("prism_theta", "prism")
 
 
 class H4(Mechanism):
@@ -85,6 +96,10 @@ class H4(Mechanism):
         How base points and rods follow the design (module docstring).
     ball_joint_limit : float, optional
         Largest rod-to-vertical angle (deg) in (0, 90); ``None``: no limit.
+    homogenising : {"h", "d", "rod", "none"}
+        Characteristic length of the angular Jacobian column (module docstring).
+    v_star : {"prism_theta", "prism"}
+        Definition of the robot size V* of SURI (module docstring).
     """
 
     name = "h4"
@@ -93,12 +108,14 @@ class H4(Mechanism):
     angular = (False, False, False, True)
     length_unit = "cm"
 
-    default_fixed = {"stroke": 100.0, "base": "scaled", "ball_joint_limit": None}
+    default_fixed = {"stroke": 100.0, "base": "scaled", "ball_joint_limit": None, "homogenising": "h",
+                     "v_star": "prism_theta"}
     default_nodes = 24**3
     min_resolution = 12
 
     def __init__(self, d: float, h: float, Qz: float, stroke: float = 100.0,
-                 base: str = "scaled", ball_joint_limit: float | None = None) -> None:
+                 base: str = "scaled", ball_joint_limit: float | None = None, homogenising: str = "h",
+                 v_star: str = "prism_theta") -> None:
         owner = "H4"
         self.d = check_positive(owner, "d", d)
         self.h = check_positive(owner, "h", h)
@@ -113,8 +130,15 @@ class H4(Mechanism):
                 raise ValueError(f"H4: parameter 'ball_joint_limit' must be in (0, 90) deg or None; "
                                  f"got {ball_joint_limit!r}")
         self.ball_joint_limit = ball_joint_limit
+        for name, value, allowed in (("homogenising", homogenising, HOMOGENISING_READINGS),
+                                     ("v_star", v_star, V_STAR_READINGS)):
+            if value not in allowed:
+                raise ValueError(f"H4: parameter '{name}' must be one of {', '.join(allowed)}; got {value!r}")
+        self.homogenising = homogenising
+        self.v_star = v_star
         self._params = {"d": self.d, "h": self.h, "Qz": self.Qz, "stroke": self.stroke,
-                        "base": self.base, "ball_joint_limit": self.ball_joint_limit}
+                        "base": self.base, "ball_joint_limit": self.ball_joint_limit,
+                        "homogenising": self.homogenising, "v_star": self.v_star}
         self.P = self.h * _SIGN_P
         self.Q = self.d * _SIGN_Q
         if base == "tracking":
@@ -147,8 +171,11 @@ class H4(Mechanism):
     # ---------------------------------------------------------- properties
     @property
     def characteristic_length(self) -> float:
-        """``h`` (cm): the lever arm of the rotation, |B C_i| (seed 000 Sec. 4.2)."""
-        return self.h
+        """Length (cm) dividing the angular column of eq. 33 (reading ``homogenising``).
+
+        Default ``h``: the lever arm of the rotation, |B C_i| (seed 000 Sec. 4.2).
+        """
+        return {"h": self.h, "d": self.d, "rod": float(self.M[0]), "none": 1.0}[self.homogenising]
 
     @property
     def actuator_range(self) -> tuple[np.ndarray, np.ndarray]:
@@ -193,7 +220,8 @@ class H4(Mechanism):
         order = np.argsort(np.arctan2(*(pts - centre).T[::-1]))
         x, y = pts[order].T
         area = 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
-        return area * (self.stroke + self.M.min()) * orientation_measure(orientation, 1)
+        angular = orientation_measure(orientation, 1) if self.v_star == "prism_theta" else 1.0
+        return area * (self.stroke + self.M.min()) * angular
 
     def invariant_axis_interval(self, poses: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
         """z: ``q_i = z + s_i(x, y, theta)`` with ``s_i = sqrt(M_i^2 - dx_i^2 - dy_i^2)``

@@ -22,6 +22,22 @@ Geometry (seed 001 eq. 1-2, derived from the geometry)
   computes ``|P_i - b_i|`` directly.
 * Limits (Table 1): actuators ``q_min..q_max`` (400-750 mm), joint cone angle
   <= ``cone`` (60 deg) at base and platform joints.
+
+Readings (choices the paper leaves open; each a constructor parameter)
+----------------------------------------------------------------------
+* ``cone_joints``: which joints the cone limit applies to, ``"both"``
+  (default: Table 1 says "joint", the paper's legs have spherical joints at
+  both ends), ``"base"``, ``"platform"`` or ``"none"``.
+* ``cone_reference``: the axis a cone angle is measured from, ``"normal"``
+  (default: the base normal k and the platform normal R k, the axis of a
+  spherical joint mounted flat) or ``"home"`` (the leg's direction at the home
+  pose c = (q_min + q_max)/2, ψ = θ = 0: a joint mounted along its leg).
+* ``offset_side``: +1 (default, eq. 1: ``p_i + d k``, the platform above the
+  U-joint centre) or -1 (``p_i - d k``, platform joints below it).
+* ``tilt_limit``: the largest tilt of the central universal joint,
+  ``arccos(cos ψ cos θ)`` (deg); ``None`` (default) means the orientation box alone.
+* ``homogenising``: characteristic length of eq. 37, ``"arm"`` (default:
+  sqrt(a²/3 + d²), the moment arm of eq. 31), ``"a"``, ``"d"`` or ``"none"`` (1 mm).
 """
 
 from __future__ import annotations
@@ -73,6 +89,8 @@ class Tricept(Mechanism):
         Actuator (leg length) range (mm), ``0 < q_min < q_max``; Table 1: 400-750.
     cone : float
         Largest joint cone angle (deg), in (0, 180); Table 1: 60.
+    cone_joints, cone_reference, offset_side, tilt_limit, homogenising
+        Readings of the paper (module docstring).
     """
 
     name = "tricept"
@@ -82,7 +100,9 @@ class Tricept(Mechanism):
     length_unit = "mm"
 
     def __init__(self, a: float, b: float, d: float, q_min: float = 400.0,
-                 q_max: float = 750.0, cone: float = 60.0) -> None:
+                 q_max: float = 750.0, cone: float = 60.0, cone_joints: str = "both",
+                 cone_reference: str = "normal", offset_side: int = 1, tilt_limit: float | None = None,
+                 homogenising: str = "arm") -> None:
         owner = "Tricept"
         self.a = check_positive(owner, "a", a)
         self.b = check_positive(owner, "b", b)
@@ -92,13 +112,32 @@ class Tricept(Mechanism):
         if cone_v >= 180.0:
             raise ValueError(f"Tricept: parameter 'cone' must be in (0, 180) degrees; got {cone!r}")
         self.cone = cone_v
+        for name, value, allowed in (("cone_joints", cone_joints, ("both", "base", "platform", "none")),
+                                     ("cone_reference", cone_reference, ("normal", "home")),
+                                     ("offset_side", offset_side, (1, -1)),
+                                     ("homogenising", homogenising, ("arm", "a", "d", "none"))):
+            if value not in allowed:
+                raise ValueError(f"Tricept: parameter '{name}' must be one of "
+                                 f"{', '.join(map(str, allowed))}; got {value!r}")
+        if tilt_limit is not None:
+            tilt_limit = check_positive(owner, "tilt_limit", tilt_limit)
+        self.cone_joints, self.cone_reference = cone_joints, cone_reference
+        self.offset_side, self.tilt_limit, self.homogenising = int(offset_side), tilt_limit, homogenising
         self._params = {"a": self.a, "b": self.b, "d": self.d, "q_min": self.q_min,
-                        "q_max": self.q_max, "cone": self.cone}
+                        "q_max": self.q_max, "cone": self.cone, "cone_joints": cone_joints,
+                        "cone_reference": cone_reference, "offset_side": self.offset_side,
+                        "tilt_limit": tilt_limit, "homogenising": homogenising}
         self.p = _triangle(self.a)
-        self.p[:, 2] = self.d  # p_i + d k, in the platform frame
+        self.p[:, 2] = self.offset_side * self.d  # p_i +- d k, in the platform frame
         self.base = _triangle(self.b)
+        home = self.p.copy()
+        home[:, 2] += 0.5 * (self.q_min + self.q_max)
+        legs = home - self.base
+        #: unit leg directions at the home pose (3, 3), the "home" cone reference
+        self._home_axes = legs / np.linalg.norm(legs, axis=1, keepdims=True)
 
-    default_fixed = {"q_min": 400.0, "q_max": 750.0, "cone": 60.0}
+    default_fixed = {"q_min": 400.0, "q_max": 750.0, "cone": 60.0, "cone_joints": "both",
+                     "cone_reference": "normal", "offset_side": 1, "tilt_limit": None, "homogenising": "arm"}
     default_nodes = 32**3
     min_resolution = 16
 
@@ -148,20 +187,33 @@ class Tricept(Mechanism):
         return (self.q_max - self.q_min) * orientation_measure(orientation, 2)
 
     def within_joint_limits(self, poses: np.ndarray) -> np.ndarray:
-        """Every base and platform joint cone angle <= ``cone`` (Table 1)."""
-        base, plat = self.cone_angles(poses)
-        limit = self.cone_limit
-        return np.all(base <= limit, axis=1) & np.all(plat <= limit, axis=1)
+        """Joint cone angles <= ``cone`` (Table 1) at the joints of ``cone_joints``, and the
+        central joint's tilt <= ``tilt_limit`` (deg) when set."""
+        poses = self._check_poses(poses)
+        ok = np.ones(poses.shape[0], dtype=bool)
+        if self.cone_joints != "none":
+            base, plat = self.cone_angles(poses)
+            limit = self.cone_limit
+            if self.cone_joints in ("both", "base"):
+                ok &= np.all(base <= limit, axis=1)
+            if self.cone_joints in ("both", "platform"):
+                ok &= np.all(plat <= limit, axis=1)
+        if self.tilt_limit is not None:
+            tilt = np.arccos(np.clip(np.cos(poses[:, 1]) * np.cos(poses[:, 2]), -1.0, 1.0))
+            ok &= tilt <= math.radians(self.tilt_limit)
+        return ok
 
     @property
     def characteristic_length(self) -> float:
-        """``sqrt(a^2/3 + d^2)`` (mm): distance from the U-joint centre to a platform joint.
+        """Length (mm) dividing the angular columns of eq. 37 (reading ``homogenising``).
 
-        This is the moment arm ``|R (a_i + d)|`` of eq. 31, so the angular
-        columns of eq. 37 divided by it are the leg-speed per unit speed of
-        the platform joints.
+        Default ``"arm"``: ``sqrt(a^2/3 + d^2)``, the distance from the U-joint
+        centre to a platform joint, i.e. the moment arm ``|R (a_i + d)|`` of eq.
+        31, so the angular columns divided by it are the leg speed per unit
+        speed of the platform joints.
         """
-        return math.sqrt(self.a**2 / 3.0 + self.d**2)
+        return {"arm": math.sqrt(self.a**2 / 3.0 + self.d**2), "a": self.a, "d": self.d,
+                "none": 1.0}[self.homogenising]
 
     @property
     def actuator_range(self) -> tuple[np.ndarray, np.ndarray]:
@@ -200,9 +252,10 @@ class Tricept(Mechanism):
     def cone_angles(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Joint cone angles (rad) of the legs (seed 001 Sec. 4.2, Table 1).
 
-        The base joint's angle is between the leg and the base normal ``k``;
-        the platform joint's angle is between the leg and the platform normal
-        ``R k``.
+        Reading ``cone_reference="normal"``: the base joint's angle is between
+        the leg and the base normal ``k``, the platform joint's between the leg
+        and the platform normal ``R k``. ``"home"``: both against the leg's
+        home direction (base frame at the base, carried by R at the platform).
 
         Returns
         -------
@@ -211,9 +264,14 @@ class Tricept(Mechanism):
         poses = self._check_poses(poses)
         legs = self.platform_points(poses) - self.base
         unit = legs / np.linalg.norm(legs, axis=-1, keepdims=True)
-        normal = self._rotation(poses[:, 1], poses[:, 2])[:, :, 2]
-        base = np.arccos(np.clip(unit[..., 2], -1.0, 1.0))
-        plat = np.arccos(np.clip(np.einsum("nki,ni->nk", unit, normal), -1.0, 1.0))
+        rot = self._rotation(poses[:, 1], poses[:, 2])
+        if self.cone_reference == "normal":
+            base = np.arccos(np.clip(unit[..., 2], -1.0, 1.0))
+            plat = np.arccos(np.clip(np.einsum("nki,ni->nk", unit, rot[:, :, 2]), -1.0, 1.0))
+        else:
+            base = np.arccos(np.clip(np.einsum("nki,ki->nk", unit, self._home_axes), -1.0, 1.0))
+            moved = np.einsum("nij,kj->nki", rot, self._home_axes)
+            plat = np.arccos(np.clip(np.einsum("nki,nki->nk", unit, moved), -1.0, 1.0))
         return base, plat
 
     # ------------------------------------------------------------- kernels

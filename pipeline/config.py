@@ -79,7 +79,7 @@ class MechanismConfig:
     ``lower``, ``upper`` and missing ``fixed`` entries take the class's values.
     """
 
-    name: str = "h4"
+    name: str = MISSING  # a registry name: the group options set it
     fixed: dict[str, Any] = field(default_factory=dict)
     design: DesignSpace = field(default_factory=DesignSpace)
     orientation: Optional[list[float]] = None

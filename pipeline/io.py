@@ -64,10 +64,11 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "resolution": ("", "grid points per sampled axis of the run's evaluations"),
     "at_bounds": ("", "design variables on a bound of the design box, name=lower|upper"),
     "optimizer_value": ("objective_unit", "what the configured optimiser found, before polish"),
-    "found_by": ("", "where the reported optimum comes from: the optimiser, polish, or reference"),
+    "found_by": ("", "where the reported optimum comes from: the optimiser or its polish step"),
     "polish_improvement": ("objective_unit", "gain of the polish step over the optimiser's result"),
     "reference_value": ("objective_unit", "reference optimum (CMA-ES + polish); null if not run"),
-    "optimizer_gap": ("1", "relative shortfall of the configured optimiser to the reported optimum"),
+    "reference_gap": ("1", "(reference_value - objective_value) / reference_value: how far the run stops "
+                           "short of the reference optimum; null if no reference was run"),
     "flat_variables": ("", "design variables along which the objective is flat at the optimum (the optimum is a set)"),
     "status": ("", "run status from its manifest: complete"),
     "wall_time": ("s", "wall time of the run"),
@@ -97,7 +98,8 @@ def column_unit(name: str, units: dict[str, str] | None = None) -> tuple[str, st
     if name in COLUMNS:
         return COLUMNS[name]
     for suffix, meaning in (("_flat_lower", "lower end of the flat interval"),
-                            ("_flat_upper", "upper end of the flat interval")):
+                            ("_flat_upper", "upper end of the flat interval"),
+                            ("_reference", "design of the reference optimum")):
         if name.endswith(suffix) and name[: -len(suffix)] in units:
             return units[name[: -len(suffix)]], meaning
     return "", ""

@@ -185,10 +185,10 @@ def _compute(c: Config, run_dir: Path, timings: dict) -> dict[str, Path]:
     timings["total"] = time.perf_counter() - start
     timings["generation_wall_time"] = optimum["wall_time"][-1] if optimum["wall_time"] else 0.0
     best = optimum["best"]
-    log.info("%s: %s %.6g (found by %s; %s alone %.6g, gap %.3g %%), V %.6g %s, GDI %.4f, SURI %.4f",
-             c.experiment_name, objective.name, best["objective_value"], best["found_by"], optimizer.name,
-             best["optimizer_value"], 100 * best["optimizer_gap"], best["volume"], best["volume_unit"],
-             best["gdi"], best["suri"])
+    gap = "" if np.isnan(best["reference_gap"]) else f"; {100 * best['reference_gap']:.3g} % short of the reference"
+    log.info("%s: %s %.6g (%s%s), V %.6g %s, GDI %.4f, SURI %.4f", c.experiment_name, objective.name,
+             best["objective_value"], best["found_by"], gap, best["volume"], best["volume_unit"], best["gdi"],
+             best["suri"])
     return paths
 
 

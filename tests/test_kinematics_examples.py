@@ -8,11 +8,12 @@ import numpy as np
 import pytest
 
 from kinematics import MECHANISMS, get_mechanism
-from kinematics.h4 import H4
+from kinematics.h4 import BASE_READINGS, H4
 from kinematics.rpr2 import RPR2
 from kinematics.rpr3 import RPR3
 from kinematics.tricept import Tricept
 
+#: every reading of how the base follows the design reproduces eq. 25-27 at h = d = 6, Qz = 42
 EQ26_POSE = np.array([[5.0, -5.0, -30.0, math.pi / 6]])
 
 
@@ -28,8 +29,9 @@ def test_unknown_mechanism_lists_names():
 
 
 # ------------------------------------------------------------------- H4
-def test_h4_base_points_and_rods_eq25():
-    m = H4(d=6, h=6, Qz=42)
+@pytest.mark.parametrize("base", BASE_READINGS)
+def test_h4_base_points_and_rods_eq25(base):
+    m = H4(d=6, h=6, Qz=42, base=base)
     a = m.base_points(np.zeros(4))[0]
     np.testing.assert_array_equal(a, [[-48, -48, 0], [-48, 48, 0], [6, 48, 0], [48, -6, 0]])
     b = m.platform_points([[0, 0, -42, 0]])[0]
@@ -37,14 +39,16 @@ def test_h4_base_points_and_rods_eq25():
     np.testing.assert_allclose(np.linalg.norm(b - a, axis=1), 42 * np.sqrt([3, 3, 2, 2]))
 
 
-def test_h4_inverse_eq26():
-    q = H4(d=6, h=6, Qz=42).inverse(EQ26_POSE)[0]
+@pytest.mark.parametrize("base", BASE_READINGS)
+def test_h4_inverse_eq26(base):
+    q = H4(d=6, h=6, Qz=42, base=base).inverse(EQ26_POSE)[0]
     np.testing.assert_allclose(q[:3], [13.021, -7.488, 9.679], atol=5e-4)
     assert abs(q[3] - 15.77) < 5e-3
 
 
-def test_h4_forward_polynomial_roots_eq27():
-    m = H4(d=6, h=6, Qz=42)
+@pytest.mark.parametrize("base", BASE_READINGS)
+def test_h4_forward_polynomial_roots_eq27(base):
+    m = H4(d=6, h=6, Qz=42, base=base)
     poly = m.forward_polynomial(m.inverse(EQ26_POSE)[0])
     assert poly.shape == (9,)
     roots = np.roots(poly)
@@ -58,16 +62,18 @@ def test_h4_forward_polynomial_roots_eq27():
     assert np.sum(np.abs(roots.imag) < 1e-9) == 2
 
 
-def test_h4_forward_returns_both_real_poses_eq27():
-    m = H4(d=6, h=6, Qz=42)
+@pytest.mark.parametrize("base", BASE_READINGS)
+def test_h4_forward_returns_both_real_poses_eq27(base):
+    m = H4(d=6, h=6, Qz=42, base=base)
     sols = m.forward(m.inverse(EQ26_POSE)[0])
     assert sols.shape == (2, 4)
     np.testing.assert_allclose(sols[1], EQ26_POSE[0], rtol=1e-10, atol=1e-10)
     np.testing.assert_allclose(sols[0], [3, -7.95, -14.58, -2.47], atol=0.01)
 
 
-def test_h4_tan_half_of_eq27_roots_gives_the_poses():
-    m = H4(d=6, h=6, Qz=42)
+@pytest.mark.parametrize("base", BASE_READINGS)
+def test_h4_tan_half_of_eq27_roots_gives_the_poses(base):
+    m = H4(d=6, h=6, Qz=42, base=base)
     sols = m.forward(m.inverse(EQ26_POSE)[0])
     np.testing.assert_allclose(np.tan(sols[:, 3] / 2), [-2.8822, 0.267957], rtol=5e-5)
 

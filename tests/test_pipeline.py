@@ -90,7 +90,7 @@ def test_results_schema_and_refined_evaluation(tmp_path):
     best = pd.read_parquet(paths["best"]).iloc[0]
     for column in ("d_ratio", "h_ratio", "Qz_ratio", "param_d", "param_h", "param_Qz", "param_base", "volume",
                    "gdi", "suri", "objective_value", "volume_refined", "gdi_refined", "objective_value_refined",
-                   "optimizer_value", "found_by", "optimizer_gap", "flat_variables", "d_ratio_flat_lower",
+                   "optimizer_value", "found_by", "reference_gap", "flat_variables", "d_ratio_flat_lower",
                    "volume_unit", "at_bounds"):
         assert column in best.index
     for redundant in ("wd", "fitness", "eta", "inverse_condition_mean", "volume_error", "gdi_error"):
@@ -198,7 +198,9 @@ def test_validate_returns_typed_objects(tmp_path):
     typed = validate(cfg)
     assert isinstance(typed, Config) and typed.mechanism.name == "tricept"
     assert type(typed.optimizer).__name__ == "GAConfig"
-    assert typed.mechanism.fixed == {"q_min": 400.0, "q_max": 750.0, "cone": 60.0}
+    from kinematics.tricept import Tricept
+
+    assert typed.mechanism.fixed == Tricept.default_fixed and typed.mechanism.fixed["cone"] == 60.0
     assert OmegaConf.is_config(cfg)
 
 

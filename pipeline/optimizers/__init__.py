@@ -9,27 +9,10 @@ by :func:`pipeline.config.register_configs`).
 
 from __future__ import annotations
 
-import importlib
-import pkgutil
-
+from kinematics.registry import discover
 from pipeline.optimizers.base import OptimizationResult, Optimizer, OptimizerConfig, Problem
 
-
-def _discover() -> dict[str, type[Optimizer]]:
-    for info in pkgutil.iter_modules(__path__):
-        if not info.name.startswith("_"):
-            importlib.import_module(f"{__name__}.{info.name}")
-    found: dict[str, type[Optimizer]] = {}
-    stack = list(Optimizer.__subclasses__())
-    while stack:
-        cls = stack.pop()
-        stack.extend(cls.__subclasses__())
-        if isinstance(getattr(cls, "name", None), str):
-            found[cls.name] = cls
-    return dict(sorted(found.items()))
-
-
-OPTIMIZERS: dict[str, type[Optimizer]] = _discover()
+OPTIMIZERS: dict[str, type[Optimizer]] = discover(__name__, __path__, Optimizer)
 
 #: the optimiser of the reference optimisation (recorded gap of paper-faithful runs)
 REFERENCE_OPTIMIZER = "cmaes"

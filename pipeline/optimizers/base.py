@@ -54,6 +54,13 @@ class OptimizerConfig:
               "an integer in [1, 100000]")
 
 
+def check_generations(population: int, generations: int, min_population: int) -> None:
+    """The population and generation counts of a generational optimiser (ConfigError if out of range)."""
+    check("optimizer.population", population, min_population <= population <= 100_000,
+          f"an integer in [{min_population}, 100000]")
+    check("optimizer.generations", generations, 1 <= generations <= 1_000_000, "an integer in [1, 1000000]")
+
+
 class Problem:
     """Box-constrained maximisation with a batch objective.
 

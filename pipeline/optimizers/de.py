@@ -16,7 +16,7 @@ import numpy as np
 from scipy.optimize import differential_evolution as scipy_de
 
 from pipeline.errors import check, finite
-from pipeline.optimizers.base import History, OptimizationResult, Optimizer, OptimizerConfig, Problem
+from pipeline.optimizers.base import check_generations, History, OptimizationResult, Optimizer, OptimizerConfig, Problem
 
 
 @dataclass
@@ -31,10 +31,7 @@ class DEConfig(OptimizerConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check("optimizer.population", self.population, 5 <= self.population <= 100_000,
-              "an integer in [5, 100000]")
-        check("optimizer.generations", self.generations, 1 <= self.generations <= 1_000_000,
-              "an integer in [1, 1000000]")
+        check_generations(self.population, self.generations, 5)
         check("optimizer.mutation", self.mutation, finite(self.mutation) and 0 < self.mutation < 2, "(0, 2)")
         check("optimizer.recombination", self.recombination,
               finite(self.recombination) and 0 <= self.recombination <= 1, "[0, 1]")

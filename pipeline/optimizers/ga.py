@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.errors import check, finite
-from pipeline.optimizers.base import History, OptimizationResult, Optimizer, OptimizerConfig, Problem
+from pipeline.optimizers.base import check_generations, History, OptimizationResult, Optimizer, OptimizerConfig, Problem
 
 
 @dataclass
@@ -57,10 +57,7 @@ class GAConfig(OptimizerConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check("optimizer.population", self.population, 2 <= self.population <= 100_000,
-              "an integer in [2, 100000]")
-        check("optimizer.generations", self.generations, 1 <= self.generations <= 1_000_000,
-              "an integer in [1, 1000000]")
+        check_generations(self.population, self.generations, 2)
         check("optimizer.selection_q", self.selection_q, finite(self.selection_q) and 0 < self.selection_q <= 1,
               "(0, 1]")
         for name in ("crossover_rate", "mutation_rate"):

@@ -19,7 +19,7 @@ import numpy as np
 
 from pipeline.errors import check, finite
 from pipeline.objective import OBJECTIVES
-from pipeline.optimizers.base import History, OptimizationResult, Optimizer, OptimizerConfig, Problem
+from pipeline.optimizers.base import check_generations, History, OptimizationResult, Optimizer, OptimizerConfig, Problem
 
 
 @dataclass
@@ -37,10 +37,7 @@ class NSGA2Config(OptimizerConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check("optimizer.population", self.population, 4 <= self.population <= 100_000,
-              "an integer in [4, 100000]")
-        check("optimizer.generations", self.generations, 1 <= self.generations <= 1_000_000,
-              "an integer in [1, 1000000]")
+        check_generations(self.population, self.generations, 4)
         names = list(self.objectives)
         check("optimizer.objectives", names,
               len(names) == 2 and len(set(names)) == 2 and all(n in OBJECTIVES for n in names),
