@@ -6,7 +6,7 @@ Public API
     dict from registry name (``"h4"``, ``"tricept"``, ``"rpr3"``, ``"rpr2"``) to
     the mechanism class. It is filled by discovering every
     :class:`~kinematics.base.Mechanism` subclass in this package's modules, so
-    adding a mechanism is one new module (plus its yaml in ``conf/mechanism``).
+    adding a mechanism is one new module (its Hydra option is generated from the class).
 ``get_mechanism(name, **params)``
     builds one mechanism from its geometric parameters.
 """

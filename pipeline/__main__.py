@@ -1,4 +1,4 @@
-"""Entry point: ``python -m pipeline [+experiment=NAME] [key=value ...]`` (``-m`` for sweeps)."""
+"""Entry point: ``pm-design`` or ``python -m pipeline`` ``[+experiment=NAME] [key=value ...]`` (``-m`` for sweeps)."""
 
 from __future__ import annotations
 
@@ -18,6 +18,11 @@ def main(cfg: DictConfig) -> dict:
     return run_from_hydra(cfg)
 
 
-if __name__ == "__main__":
+def entry() -> None:
+    """The console script: the one-line precheck of a single run, then Hydra."""
     precheck_overrides(sys.argv[1:])
     main()
+
+
+if __name__ == "__main__":
+    entry()

@@ -48,8 +48,8 @@ from pipeline.objective import OBJECTIVES
 from pipeline.optimizers import OPTIMIZERS, REFERENCE_OPTIMIZER, OptimizerConfig
 from pipeline.optimizers.base import MAX_SEED
 
-#: the primary config directory (conf/ beside the packages)
-CONFIG_DIR = Path(__file__).resolve().parent.parent / "conf"
+#: the primary config directory, shipped inside the package (works from a wheel, from any folder)
+CONFIG_DIR = Path(__file__).resolve().parent / "conf"
 BACKENDS = ("loky", "threading", "multiprocessing", "dask")
 PLOT_FORMATS = ("png", "pdf", "svg")
 #: conservative grid throughput (nodes/s per worker) for the run-time estimate

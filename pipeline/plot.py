@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.colors import ListedColormap
 from matplotlib.figure import Figure
 
 from kinematics.base import Mechanism
@@ -73,7 +74,9 @@ def plot_convergence(history: pd.DataFrame, path: Path, title: str, ylabel: str,
 def plot_workspace(mech: Mechanism, orientation: tuple[float, float], min_ic: float, length: float | None,
                    directory: Path, what: str, plot=None) -> list[Path]:
     """``workspace.png`` and ``inverse_condition.png`` of one design on its plot slice."""
-    fixed, (i, j), label = mech.plot_slice(orientation)
+    fixed, (i, j), _ = mech.plot_slice(orientation)
+    label = ", ".join(f"{symbol(n)} = {np.degrees(v):.1f}°" if mech.angular[mech.pose_names.index(n)]
+                      else f"{symbol(n)} = {v:.4g} {mech.length_unit}" for n, v in fixed.items())
     ev = evaluate(mech, orientation=orientation, min_inverse_condition=min_ic, length=length, fixed=fixed,
                   resolution=SLICE_RESOLUTION, return_samples=True, error_estimate=False)
     pts, inside = ev.samples, ev.inside
@@ -90,7 +93,7 @@ def plot_workspace(mech: Mechanism, orientation: tuple[float, float], min_ic: fl
             cmap = "viridis"
         elif name == "workspace":
             values = np.where(inside, 1.0, np.nan)
-            bar, cmap = None, "Blues"
+            bar, cmap = None, ListedColormap(["tab:blue"])
         else:
             values = np.where(inside, values, np.nan)
             bar, cmap = "1/κ", "magma"
@@ -149,7 +152,7 @@ def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
                 ax.plot(w, stats[(column, "mean")], style, label=label, ms=4)
                 ax.fill_between(w, stats[(column, "min")], stats[(column, "max")], alpha=0.2)
         n_runs = part.groupby("w_d").size()
-        ax.set_xlabel("$w_d$")
+        ax.set_xlabel("$w_d$ [1]")
         ax.set_ylabel("index [1]")
         ax.set_title(f"{name}: optima vs $w_d$ (runs per point: {n_runs.max() if len(n_runs) else 0})")
         ax.grid(alpha=0.3)

@@ -15,7 +15,7 @@ open is a constructor parameter (a *reading*, see the module docstrings of
    the workspace;
 3. returns the Markdown section that :mod:`pipeline.reproduce` puts into
    ``docs/reproduction.md``, naming the best reading and the
-   ``+reading=...`` preset (``conf/reading/``) that selects it.
+   ``+reading=...`` preset (``pipeline/conf/reading/``) that selects it.
 
 Paper numbers are data (:data:`H4_PAPER`, :data:`TRICEPT_PAPER`).
 """
@@ -164,7 +164,7 @@ def check_reading(reading: Reading, paper_designs: dict[str, np.ndarray], cache_
 
 
 def reading_preset(reading: Reading) -> str | None:
-    """Name of the ``conf/reading/`` preset that selects exactly this reading, if any."""
+    """Name of the ``pipeline/conf/reading/`` preset that selects exactly this reading, if any."""
     for path in sorted((CONFIG_DIR / "reading").glob("*.yaml")):
         data = yaml.safe_load(path.read_text()) or {}
         mech = data.get("mechanism", {})

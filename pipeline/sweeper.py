@@ -8,7 +8,8 @@
   stale runs into a new sweep);
 * a job that fails at run time does not stop the sweep (the task records it
   in its manifest and returns); at the end the completed jobs are
-  aggregated into ``paths.dataset_dir``, ``tradeoff.png`` is drawn, and a
+  aggregated into ``paths.dataset_dir``, ``tradeoff.png`` and ``report.html``
+  (:mod:`pipeline.report`) are written into the sweep directory, and a
   one-line summary is printed; the exit status is 1 if any job failed.
 
 It takes the sweep from the command line and from ``hydra.sweeper.params``
@@ -96,6 +97,7 @@ class CheckedSweeper(BasicSweeper):
     def _finish(self, results: list, sweep_dir: Path) -> None:
         from pipeline.aggregate import aggregate
         from pipeline.plot import plot_tradeoff
+        from pipeline.report import write_report
 
         failed = []
         for k, r in enumerate(results):
@@ -109,6 +111,7 @@ class CheckedSweeper(BasicSweeper):
                 report = aggregate(sweep_dir, dataset)
                 if report.best is not None:
                     plot_tradeoff(report.best, sweep_dir / "tradeoff.png")
+                write_report(sweep_dir)
             except (ConfigError, RunError) as exc:
                 _fail(f"aggregation of {sweep_dir}: {exc}", 1)
         summary = f"{completed} of {len(results)} jobs completed"

@@ -17,7 +17,7 @@ from omegaconf import OmegaConf
 from pipeline.aggregate import aggregate
 from pipeline.aggregate import main as aggregate_main
 from pipeline.cache import cached
-from pipeline.config import Config, register_configs, validate
+from pipeline.config import CONFIG_DIR, Config, register_configs, validate
 from pipeline.errors import ConfigError
 from pipeline.evaluate import evaluate_designs
 from pipeline.io import read_metadata
@@ -26,7 +26,7 @@ from pipeline.run import run_study
 from pipeline.sample import sample_designs
 
 ROOT = Path(__file__).resolve().parents[1]
-CONF = ROOT / "conf"
+CONF = CONFIG_DIR
 EXPERIMENTS = sorted(p.stem for p in (CONF / "experiment").glob("*.yaml"))
 
 

@@ -112,7 +112,10 @@ class History:
     objective over the population), ``n_evaluations`` (new evaluations in
     that generation), ``wall_time`` (s since start; dropped from result
     files so they depend on the config only) and the best design ``x0..``.
-    Progress is logged about every 10 % of the expected generations.
+
+    Progress: on a terminal, one tqdm bar (generations, evaluations/s, ETA,
+    best so far); otherwise (CI, SLURM, a log file) one log line about every
+    10 % of the expected generations. Every generation is logged at DEBUG.
     """
 
     def __init__(self, expected_generations: int | None = None, label: str = "") -> None:
@@ -121,6 +124,12 @@ class History:
         self.expected = expected_generations
         self.label = label
         self._last_logged = -1
+        self._bar = None
+        if progress_bars_enabled():
+            from tqdm import tqdm
+
+            self._bar = tqdm(total=expected_generations, desc=label.strip(" :") or "optimise", unit="gen",
+                             leave=False, dynamic_ncols=True)
 
     def record(self, population: np.ndarray, values: np.ndarray, n_new: int, **extra: float) -> None:
         values = np.asarray(values, dtype=float)
@@ -135,20 +144,39 @@ class History:
         self._progress(row)
 
     def _progress(self, row: dict) -> None:
+        elapsed = row["wall_time"]
+        evaluations = sum(r["n_evaluations"] for r in self.rows)
+        rate = evaluations / elapsed if elapsed > 0 else math.inf
+        log.debug("%sgeneration %d: best %.6g, mean %.6g, %d evaluations", self.label, row["generation"],
+                  row["best"], row["mean"], evaluations)
+        if self._bar is not None:
+            if row["generation"] > 0:
+                self._bar.update(1)
+            self._bar.set_postfix(best=f"{row['best']:.5g}", evals_s=f"{rate:.0f}", refresh=False)
+            return
         gen, total = row["generation"], self.expected
         if total:
             step = max(total // 10, 1)
             if gen // step == self._last_logged and gen != total:
                 return
             self._last_logged = gen // step
-        elapsed = row["wall_time"]
-        evaluations = sum(r["n_evaluations"] for r in self.rows)
-        rate = evaluations / elapsed if elapsed > 0 else math.inf
         of = f"/{total}" if total else ""
         log.info("%sgeneration %d%s: best %.6g, %.0f evaluations/s", self.label, gen, of, row["best"], rate)
 
     def frame(self) -> pd.DataFrame:
+        """The rows as a DataFrame (closes the progress bar: the run is over)."""
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None
         return pd.DataFrame(self.rows)
+
+
+def progress_bars_enabled() -> bool:
+    """Bars only on an interactive terminal (not in CI, SLURM, pipes or log files)."""
+    import os
+    import sys
+
+    return sys.stderr.isatty() and os.environ.get("CI") is None
 
 
 @dataclass
