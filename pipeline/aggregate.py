@@ -42,7 +42,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from pipeline.errors import ConfigError, RunError
-from pipeline.io import to_table, write_table
+from pipeline.io import column_unit, to_table, write_table
 from pipeline.run import MANIFEST, TABLES, read_manifest
 
 log = logging.getLogger(__name__)
@@ -131,7 +131,9 @@ def _run_tables(run: Path, manifest: dict) -> dict[str, pa.Table]:
         data = pq.read_table(path)
         for k, (name, value) in enumerate(ids.items()):
             typ = pa.int64() if name == "job" else pa.string()
-            data = data.add_column(k, pa.field(name, typ), pa.array([value] * data.num_rows, typ))
+            unit, meaning = column_unit(name)
+            field = pa.field(name, typ, metadata={b"unit": unit.encode(), b"description": meaning.encode()})
+            data = data.add_column(k, field, pa.array([value] * data.num_rows, typ))
         out[table] = data
     best = out["best"].slice(0, 1).to_pandas()
     runs = pd.DataFrame([{**ids, "config_hash": manifest["config_hash"],

@@ -62,7 +62,7 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "volume_refined": ("volume_unit", "V at refine_factor x the resolution"),
     "gdi_refined": ("1", "GDI at refine_factor x the resolution"),
     "resolution": ("", "grid points per sampled axis of the run's evaluations"),
-    "at_bounds": ("", "design variables on a bound of the design box, name=lower|upper"),
+    "at_bounds": ("", "design variables on a bound of the design box, as name=lower or name=upper"),
     "optimizer_value": ("objective_unit", "what the configured optimiser found, before polish"),
     "found_by": ("", "where the reported optimum comes from: the optimiser or its polish step"),
     "polish_improvement": ("objective_unit", "gain of the polish step over the optimiser's result"),
@@ -73,6 +73,9 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "status": ("", "run status from its manifest: complete"),
     "wall_time": ("s", "wall time of the run"),
     "source": ("", "run directory the dataset row was read from"),
+    "overrides": ("", "the run's command-line overrides"),
+    "code_version": ("", "package version + hash of the sources that computed the run"),
+    "git_commit": ("", "git commit of the sources (-dirty: with uncommitted changes)"),
 }
 
 
@@ -102,6 +105,9 @@ def column_unit(name: str, units: dict[str, str] | None = None) -> tuple[str, st
                             ("_reference", "design of the reference optimum")):
         if name.endswith(suffix) and name[: -len(suffix)] in units:
             return units[name[: -len(suffix)]], meaning
+    if name.startswith("param_"):
+        return ("mechanism unit", "mechanism constructor parameter (lengths in the mechanism's unit, cm for H4 "
+                "and mm otherwise; angles in deg; readings as names)")
     return "", ""
 
 
