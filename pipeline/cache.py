@@ -3,7 +3,7 @@
 Stages are plain functions of typed config sections; :func:`cached` wraps
 one with the Memory of ``<cache_dir>/<CODE_VERSION>``. The code version
 (package version + a hash of every source file of ``kinematics`` and
-``pipeline``) is part of the location, not of the stages' signatures, so
+``pipeline`` except the document writers) is part of the location, not of the stages' signatures, so
 editing any source starts a fresh cache and the stages never see it.
 ``n_jobs`` is never part of a key: results do not depend on it. Tests check
 hits with joblib's own ``check_call_in_cache``.
@@ -29,12 +29,20 @@ except PackageNotFoundError:  # a source tree that was not installed
     __version__ = "0+unknown"
 
 
+#: modules that write documents and pages from results, which no cached stage runs: editing their
+#: prose must not throw away hours of cached studies. Everything else is in the key.
+DOCUMENT_WRITERS = ("pipeline/reproduce.py", "pipeline/report.py")
+
+
 def _source_digest() -> str:
-    """Hash of every ``.py`` file of the two packages (names and contents), 12 hex digits."""
+    """Hash of every ``.py`` file of the two packages (names and contents) but
+    :data:`DOCUMENT_WRITERS`, 12 hex digits."""
     digest = hashlib.sha256()
     for package in (kinematics, pipeline):
         root = Path(package.__file__).parent
         for path in sorted(root.rglob("*.py")):
+            if str(path.relative_to(root.parent)) in DOCUMENT_WRITERS:
+                continue
             digest.update(str(path.relative_to(root.parent)).encode())
             digest.update(path.read_bytes())
     return digest.hexdigest()[:12]
