@@ -606,19 +606,19 @@ def readings_study(r: Reproduction, default_sweep: pd.DataFrame) -> None:
         best_sweep = pd.DataFrame([r.study(f"h4_{preset}_sweep_wd{w:.2f}", ["+experiment=h4_mixed", f"+reading={preset}",
                                                                              f"objective.w_d={w}", "optimizer.seed=0"])[0]
                                    for w in READING_SWEEP])
-        fig, axes = plt.subplots(1, 2, figsize=(12, 4.2), sharey=False)
+        fig, axes = plt.subplots(1, 2, figsize=(13, 4.4), layout="constrained")
         for ax, (title, sweep) in zip(axes, (("default reading", default_sweep), (f"reading {preset}", best_sweep))):
             ax.plot(sweep["w_d"], sweep["gdi"], "o-", label="GDI")
             ax.plot(sweep["w_d"], sweep["suri"], "s-", label="SURI")
-            ax.set_xlabel("$w_d$")
-            ax.set_ylabel("index [1]")
+            ax.set_xlabel("$w_d$ [1]")
+            ax.set_ylabel("GDI, SURI [1]")
             ax.set_title(f"H4 optima vs $w_d$, {title}")
             ax.grid(alpha=0.3)
             twin = ax.twinx()
             twin.plot(sweep["w_d"], sweep["volume"], "k--", alpha=0.5, label="V")
             twin.set_ylabel("V [cm³·rad]")
             ax.legend(loc="center left")
-        fig.savefig(r.figures / "h4_fig8_readings.png", dpi=150, bbox_inches="tight")
+        fig.savefig(r.figures / "h4_fig8_readings.png", dpi=150)
         plt.close(fig)
     # Tricept
     tri_all = rd.tricept_readings()
