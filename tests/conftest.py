@@ -14,6 +14,7 @@ PAPER_DESIGNS = {
     "rpr3": dict(base=[[0, 0], [200, 0], [0, 200]], platform=[[0, 0], [50, 0], [40, 40]],
                  rho_min=80.0, rho_max=160.0),  # seed 003 Sec. 5.2-5.4
     "rpr2": dict(b=5.0, q_min=6.0, q_max=9.6),  # seed 004
+    "delta": dict(R=200.0, r=50.0, la=200.0, lb=400.0),  # kinematics/delta.py
 }
 
 #: a box of poses (lower, upper) per mechanism where most poses are reachable
@@ -22,6 +23,7 @@ POSE_BOXES = {
     "tricept": ([420.0, -0.6, -0.6], [720.0, 0.6, 0.6]),
     "rpr3": ([20.0, 20.0, -np.pi], [180.0, 180.0, np.pi]),
     "rpr2": ([-6.0, -9.0], [11.0, 9.0]),
+    "delta": ([-150.0, -150.0, -480.0], [150.0, 150.0, -250.0]),
 }
 
 

@@ -65,8 +65,8 @@ SINGLE_RUN_REFUSALS = [
     ("typo key w_d", ["+objective.wd=0.9"], "objective.wd"),
     ("unknown top-level key", ["+foo=1"], "foo"),
     ("misspelt key without +", ["evaluate.resolutoin=3"], "resolutoin"),
-    ("unknown mechanism option", ["mechanism=delta"], "mechanism/delta"),
-    ("unknown mechanism name", ["mechanism.name=delta"], "mechanism.name"),
+    ("unknown mechanism option", ["mechanism=stewart"], "mechanism/stewart"),
+    ("unknown mechanism name", ["mechanism.name=stewart"], "mechanism.name"),
     ("schema is no option", ["mechanism=schema"], "mechanism/schema"),
     ("unknown optimizer option", ["optimizer=pso"], "optimizer/pso"),
     ("optimizer name without its group", ["optimizer.name=de"], "optimizer.name"),
@@ -185,7 +185,7 @@ def test_sweep_with_one_bad_job_is_refused_before_any_job_runs(tmp_path):
 
 def test_sweep_with_an_unknown_option_is_refused_before_any_job_runs(tmp_path):
     out = tmp_path / "out"
-    proc = run_cli(["-m", "+experiment=h4_mixed", *TINY, f"paths.output_dir={out}", "mechanism=h4,delta"], out)
+    proc = run_cli(["-m", "+experiment=h4_mixed", *TINY, f"paths.output_dir={out}", "mechanism=h4,stewart"], out)
     assert proc.returncode != 0
     assert "Traceback" not in proc.stderr
     assert not any(p.suffix == ".parquet" for p in files_under(out))

@@ -170,7 +170,7 @@ def test_dask_backend_on_a_local_cluster(tmp_path):
 @pytest.mark.parametrize("override, field", [
     ("objective.w_d=1.5", "objective.w_d"),
     ("mechanism.design.lower=[0.2,0.01,0.35]", "mechanism.design bounds of d_ratio"),
-    ("mechanism.name=delta", "mechanism.name"),
+    ("mechanism.name=stewart", "mechanism.name"),
     ("evaluate.resolution=0", "evaluate.resolution"),
     ("parallel.n_jobs=0", "parallel.n_jobs"),
     ("objective.name=speed", "objective.name"),

@@ -1,0 +1,216 @@
+"""Clavel's 3-DOF translational Delta robot (R. Clavel, EPFL thesis 1991; US patent 4,976,582).
+
+Frame and units
+---------------
+Base frame: origin at the centre of the base, z up; the platform works below
+the base plane (z < 0). Lengths in mm, actuator angles in rad. Pose
+``(x, y, z)``: the centre of the travelling plate, which only translates
+(each forearm is a spatial parallelogram).
+
+Geometry (derived here; no seed paper covers the Delta)
+-------------------------------------------------------
+Leg i (i = 1, 2, 3) lies in the vertical plane at azimuth ``phi_i = 0, 120, 240 deg``
+with radial unit vector ``e_i``:
+
+* actuated revolute joint at ``R e_i`` on the base, arm of length ``la``
+  rotated down by ``theta_i`` from the horizontal: elbow
+  ``E_i = (R + la cos theta_i) e_i - la sin theta_i k``;
+* platform joint at ``P + r e_i``; the forearm (parallelogram) of length ``lb``
+  joins the elbow to it: ``|P + r e_i - E_i| = lb``.
+
+In the leg's frame, with ``u = x_i - (R - r)`` (``x_i, y_i`` the pose rotated by
+``-phi_i``): ``A cos theta + B sin theta = C`` with ``A = 2 la u``,
+``B = -2 la z``, ``C = u^2 + y_i^2 + z^2 + la^2 - lb^2``. Inverse kinematics takes
+the root with the elbow outward, ``theta = atan2(B, A) - arccos(C / sqrt(A^2 + B^2))``.
+Forward kinematics is the intersection of the three spheres of radius ``lb``
+about ``E_i - r e_i``: two points (the two assembly modes), found in closed form.
+The Jacobian (``theta_dot = J x_dot``) is ``-grad_x F_i / (dF_i/dtheta_i)`` of the
+closure ``F_i = |P + r e_i - E_i|^2 - lb^2``.
+
+Limits: actuators ``theta_min <= theta_i <= theta_max`` (default -40 to 80 deg,
+the range quoted for ABB's IRB 360 FlexPicker); the out-of-plane angle of each
+forearm ``arcsin(y_i / lb)`` within ``passive_limit`` (ball joints of the
+parallelogram, default 45 deg); the platform below the base plane.
+
+Design variables: ``r_ratio = r / R`` and ``forearm_ratio = lb / la`` at a
+fixed base radius ``R`` and arm length ``la`` (200 mm each by default).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from kinematics.base import DesignVariable, Mechanism, check_positive, check_range
+
+_AZIMUTH = np.radians([0.0, 120.0, 240.0])
+
+
+class Delta(Mechanism):
+    """Delta robot with three revolute actuators and parallelogram forearms.
+
+    Parameters
+    ----------
+    R, r : float
+        Base and platform radii (mm), ``0 < r < R``.
+    la, lb : float
+        Arm and forearm lengths (mm), > 0.
+    theta_min, theta_max : float
+        Actuator range (deg, below the horizontal positive).
+    passive_limit : float
+        Largest out-of-plane angle of a forearm (deg), in (0, 90).
+    """
+
+    name = "delta"
+    dof = 3
+    pose_names = ("x", "y", "z")
+    angular = (False, False, False)
+    length_unit = "mm"
+    default_fixed = {"R": 200.0, "la": 200.0, "theta_min": -40.0, "theta_max": 80.0, "passive_limit": 45.0}
+    default_nodes = 32**3
+    min_resolution = 16
+
+    design_variables = (
+        DesignVariable("r_ratio", 0.15, 0.8, "r / R"),
+        DesignVariable("forearm_ratio", 1.2, 3.0, "lb / la"),
+    )
+
+    def __init__(self, R: float, r: float, la: float, lb: float, theta_min: float = -40.0,
+                 theta_max: float = 80.0, passive_limit: float = 45.0) -> None:
+        owner = "Delta"
+        self.r, self.R = check_range(owner, "r", r, "R", R)
+        self.la = check_positive(owner, "la", la)
+        self.lb = check_positive(owner, "lb", lb)
+        lo, hi = float(theta_min), float(theta_max)
+        if not (math.isfinite(lo) and math.isfinite(hi) and -180 < lo < hi < 180):
+            raise ValueError(f"Delta: parameters 'theta_min' < 'theta_max' must lie in (-180, 180) deg; "
+                             f"got {theta_min!r}, {theta_max!r}")
+        self.theta_min, self.theta_max = lo, hi
+        self.passive_limit = check_positive(owner, "passive_limit", passive_limit)
+        if self.passive_limit >= 90:
+            raise ValueError(f"Delta: parameter 'passive_limit' must be in (0, 90) deg; got {passive_limit!r}")
+        self._params = {"R": self.R, "r": self.r, "la": self.la, "lb": self.lb, "theta_min": lo,
+                        "theta_max": hi, "passive_limit": self.passive_limit}
+        self._cos, self._sin = np.cos(_AZIMUTH), np.sin(_AZIMUTH)
+
+    @classmethod
+    def from_design(cls, design: np.ndarray, **fixed: object) -> "Delta":
+        """``(r / R, lb / la)`` at the fixed ``R`` and ``la`` (mm)."""
+        fixed = dict(fixed)
+        r_ratio, forearm_ratio = (float(v) for v in np.ravel(design))
+        R, la = float(fixed.pop("R", 200.0)), float(fixed.pop("la", 200.0))
+        return cls(R=R, r=r_ratio * R, la=la, lb=forearm_ratio * la, **fixed)
+
+    # ---------------------------------------------------------- properties
+    @property
+    def characteristic_length(self) -> float:
+        """``lb`` (mm); the Delta's pose has no angular variable, so nothing is divided by it."""
+        return self.lb
+
+    @property
+    def actuator_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """``theta_min <= theta_i <= theta_max`` (rad)."""
+        return np.full(3, math.radians(self.theta_min)), np.full(3, math.radians(self.theta_max))
+
+    @property
+    def default_orientation(self) -> tuple[float, float]:
+        """No angular pose variable; (0, 0) is a placeholder."""
+        return (0.0, 0.0)
+
+    def pose_bounds(self, orientation: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+        """Box of the workspace (mm): within ``R - r + la + lb`` of the axis, below the base plane."""
+        reach = self.R - self.r + self.la + self.lb
+        return np.array([-reach, -reach, -(self.la + self.lb)]), np.array([reach, reach, 0.0])
+
+    def reference_volume(self, orientation: tuple[float, float]) -> float:
+        """``V* = pi (R - r + la + lb)^2 (la + lb)`` (mm^3): the cylinder of :meth:`pose_bounds`."""
+        return math.pi * (self.R - self.r + self.la + self.lb) ** 2 * (self.la + self.lb)
+
+    def plot_slice(self, orientation: tuple[float, float]) -> tuple[dict[str, float], tuple[int, int], str]:
+        """The horizontal (x, y) plane at the median height of the workspace."""
+        from kinematics.workspace import evaluate  # workspace imports this module's base
+
+        coarse = evaluate(self, resolution=16, return_samples=True, error_estimate=False)
+        heights = coarse.samples[coarse.inside, 2]
+        z = float(np.median(heights)) if heights.size else -0.5 * (self.la + self.lb)
+        return {"z": z}, (0, 1), f"z = {z:.0f} mm"
+
+    def within_joint_limits(self, poses: np.ndarray) -> np.ndarray:
+        """Every forearm's out-of-plane angle ``arcsin(|y_i| / lb)`` within ``passive_limit`` (N,) bool."""
+        poses = self._check_poses(poses)
+        _, y_leg, _ = self._leg_frame(poses)
+        return np.all(np.abs(y_leg) <= self.lb * math.sin(math.radians(self.passive_limit)), axis=1)
+
+    # ------------------------------------------------------------- kernels
+    def _leg_frame(self, poses: np.ndarray):
+        """``u = x_i - (R - r)``, ``y_i`` (each (N, 3)) and z (N, 1), mm."""
+        x, y, z = poses[:, 0:1], poses[:, 1:2], poses[:, 2:3]
+        x_leg = self._cos * x + self._sin * y
+        y_leg = -self._sin * x + self._cos * y
+        return x_leg - (self.R - self.r), y_leg, z
+
+    def _inverse(self, poses: np.ndarray) -> np.ndarray:
+        """Elbow-out actuator angles (rad), NaN where a leg cannot reach."""
+        u, y_leg, z = self._leg_frame(poses)
+        a = 2.0 * self.la * u
+        b = -2.0 * self.la * z
+        c = u**2 + y_leg**2 + z**2 + self.la**2 - self.lb**2
+        rho = np.hypot(a, b)
+        ratio = np.where(rho > 0, c / np.where(rho > 0, rho, 1.0), np.nan)
+        theta = np.arctan2(b, a) - np.arccos(np.where(np.abs(ratio) <= 1.0, ratio, np.nan))
+        return (theta + np.pi) % (2 * np.pi) - np.pi
+
+    def _closure(self, poses: np.ndarray, q: np.ndarray):
+        """Forearm vector in the leg frame (3 arrays (N, 3)) for actuator angles q (N, 3) or (3,)."""
+        u, y_leg, z = self._leg_frame(poses)
+        cq, sq = np.cos(q), np.sin(q)
+        return u - self.la * cq, y_leg, z + self.la * sq, cq, sq
+
+    def _jacobian(self, poses: np.ndarray) -> np.ndarray:
+        """``J`` (N, 3, 3), ``theta_dot = J x_dot`` (rad/mm), from ``F_i = |forearm|^2 - lb^2``."""
+        q = self._inverse(poses)
+        fx, fy, fz, cq, sq = self._closure(poses, q)
+        u, _, z = self._leg_frame(poses)
+        d_theta = 2.0 * self.la * (u * sq + z * cq)  # dF_i / dtheta_i
+        grad = np.stack([2.0 * (fx * self._cos - fy * self._sin), 2.0 * (fx * self._sin + fy * self._cos),
+                         2.0 * fz], axis=-1)  # dF_i / d(x, y, z), base frame
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return -grad / d_theta[..., None]
+
+    def _constraints(self, poses: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """``|forearm_i|^2 - lb^2`` (mm^2), zero at a solution for ``q``."""
+        fx, fy, fz, _, _ = self._closure(poses, q)
+        return fx**2 + fy**2 + fz**2 - self.lb**2
+
+    def _constraints_jacobian(self, poses: np.ndarray, q: np.ndarray) -> np.ndarray:
+        fx, fy, fz, _, _ = self._closure(poses, q)
+        return np.stack([2.0 * (fx * self._cos - fy * self._sin), 2.0 * (fx * self._sin + fy * self._cos),
+                         2.0 * fz], axis=-1)
+
+    def sphere_centres(self, q: np.ndarray) -> np.ndarray:
+        """Centres ``E_i - r e_i`` (3, 3) of the spheres of radius ``lb`` the platform centre lies on (mm)."""
+        q = self._check_actuators(q)
+        radial = self.R - self.r + self.la * np.cos(q)
+        return np.column_stack([radial * self._cos, radial * self._sin, -self.la * np.sin(q)])
+
+    def assembly_modes(self, q: np.ndarray) -> np.ndarray:
+        """Both intersections (k <= 2, 3) of the three spheres, lowest z first (mm); not filtered by branch."""
+        s = self.sphere_centres(q)
+        normal = np.cross(s[1] - s[0], s[2] - s[0])
+        rows = np.array([s[1] - s[0], s[2] - s[0]]) * 2.0
+        rhs = np.array([s[1] @ s[1] - s[0] @ s[0], s[2] @ s[2] - s[0] @ s[0]])
+        p0 = np.linalg.lstsq(rows, rhs, rcond=None)[0]  # the point of the line nearest the origin
+        n = normal / np.linalg.norm(normal)
+        d = p0 - s[0]
+        b, c = 2.0 * (n @ d), d @ d - self.lb**2
+        disc = b * b - 4.0 * c
+        if disc < 0:
+            return np.empty((0, 3))
+        roots = np.array([(-b - math.sqrt(disc)) / 2.0, (-b + math.sqrt(disc)) / 2.0])
+        points = p0 + roots[:, None] * n
+        return points[np.argsort(points[:, 2])]
+
+    def _forward(self, q: np.ndarray) -> np.ndarray:
+        """The three-sphere intersection (exact); :meth:`forward` keeps the elbow-out branch."""
+        return self.assembly_modes(q)
