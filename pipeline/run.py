@@ -45,7 +45,7 @@ from pipeline.evaluate import evaluate_designs
 from pipeline.io import git_commit, write_parquet, write_text
 from pipeline.objective import EVALUATION_FIELDS, objective_values
 from pipeline.optimise import optimise_design
-from pipeline.plot import plot_convergence, plot_front, plot_workspace
+from pipeline.plot import plot_convergence, plot_front, plot_workspace, symbol
 from pipeline.sample import sample_designs
 
 log = logging.getLogger(__name__)
@@ -223,7 +223,7 @@ def _plots(c: Config, optimum: dict, run_dir: Path) -> dict[str, Path]:
     unit = optimum["best"]["objective_unit"]
     out = {"convergence": plot_convergence(optimum["history"], run_dir / "convergence.png",
                                            f"{c.optimizer.name} convergence ({what})",
-                                           f"{c.objective.name} [{unit}]", c.plot)}
+                                           f"{symbol(c.objective.name)} [{unit}]", c.plot)}
     ws, ic = plot_workspace(mech, orientation, mech_cfg.min_inverse_condition, mech_cfg.length, run_dir,
                             what, c.plot)
     out.update(workspace=ws, inverse_condition=ic)
