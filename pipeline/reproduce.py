@@ -250,9 +250,11 @@ paper's Table 2 design (d, h ≈ 1 cm), for which the paper reports V = 4.19, gi
 
 {table(["homogenising length L", "V [cm³ rad]", "GDI"], length_effect)}
 
-A fixed length of the order of the rods makes such a design lose its dexterity (1/κ ≤ 0.01) almost
-everywhere. That is the most likely reason for the paper's tiny Table 2 workspace. With L = h the
-dexterity does not depend on the scale of the platform.
+A fixed length of the order of the rods weighs the rotation so little that 1/κ falls towards the
+dexterity limit (0.01): with L = a rod this design keeps {length_effect[1][1] / length_effect[0][1]:.0%} of
+its volume at a GDI of {length_effect[1][2]}, with L = 100 cm {length_effect[2][1] / length_effect[0][1]:.1%}.
+That is the most likely reason for the paper's tiny Table 2 workspace. With L = h the dexterity
+does not depend on the scale of the platform.
 """)
     return best_runs
 
