@@ -238,6 +238,21 @@ class Mechanism(ABC):
         """
         return None
 
+    def exact_axis_columns(self, poses: np.ndarray, axis_lo: float, axis_hi: float,
+                           length: float | None = None
+                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """Optional compiled path of the exact-axis integration (see :meth:`invariant_axis_interval`).
+
+        A mechanism with an invariant axis may fuse, per pose (N, dof), the
+        feasible interval of that axis clipped to ``[axis_lo, axis_hi]``, its
+        passive-joint limits and ``1/kappa`` (homogenised by ``length``) into
+        one compiled loop, returning ``(lower, upper, ic)`` each (N,) with
+        ``ic`` NaN where the pose is outside for any reason but orientation
+        and dexterity. ``None`` (the default) selects the numpy path, which is
+        the reference the compiled one is tested against.
+        """
+        return None
+
     def volume_unit(self, orientation: tuple[float, float] | None = None,
                     fixed: dict[str, float] | None = None) -> str:
         """Unit of the workspace volume over the pose variables not in ``fixed``.

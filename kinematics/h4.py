@@ -52,8 +52,11 @@ Geometry (seed 000 eq. 13-16, generalised from the example eq. 25)
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from kinematics import kernels
 from kinematics.algebra import real_tan_half_angles, trig_polynomial_in_tan_half
 from kinematics.rows import row_all, row_max, row_min
 from kinematics.base import (
@@ -236,6 +239,32 @@ class H4(Mechanism):
         reachable = row_all(np.isfinite(drop))
         return 2, np.where(reachable, lower, np.inf), np.where(reachable, upper, -np.inf)
 
+    def exact_axis_columns(self, poses: np.ndarray, axis_lo: float, axis_hi: float,
+                           length: float | None = None
+                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """Compiled fused path of :meth:`invariant_axis_interval` + membership (z exact).
+
+        Per (x, y, theta) pose, one pass: the feasible z interval of eq. 11
+        clipped to ``[axis_lo, axis_hi]`` (cm), the ball-joint limit, and
+        ``1/kappa`` of eq. 33's Jacobian homogenised by ``length`` (cm;
+        default :attr:`characteristic_length`). Returns ``(lower, upper, ic)``,
+        each (N,): ``ic`` is NaN where the interval is empty or a joint limit
+        fails, as the numpy path gives. ``None`` when the compiled kernels are
+        off (``PM_DESIGN_KERNELS=numpy``).
+        """
+        if not kernels.compiled():
+            return None
+        poses = self._check_poses(poses)
+        inv_length = float(self.angular_scale(length)[3])
+        if self.ball_joint_limit is None:
+            reach = np.full(4, np.inf)
+        else:
+            reach = self.M * np.sin(np.radians(self.ball_joint_limit))
+        lower, upper, jac = _h4_columns(np.ascontiguousarray(poses), self.a, self.b, self.P, self.Q,
+                                        self.M, self.stroke, float(axis_lo), float(axis_hi),
+                                        inv_length, reach)
+        return lower, upper, kernels.inverse_condition_batch(jac, np.ones(4))
+
     def within_joint_limits(self, poses: np.ndarray) -> np.ndarray:
         """Rod-to-vertical angle within ``ball_joint_limit`` (N,) bool; all True without a limit.
 
@@ -386,3 +415,63 @@ class H4(Mechanism):
             return np.empty((0, 4))
         num, den, *_ = self._linear_position(theta, q)
         return self._polish(np.column_stack([num / den[:, None], theta]), q, self.M**2)
+
+
+
+@kernels.jit
+def _h4_columns(poses, a, b, P, Q, M, stroke, axis_lo, axis_hi, inv_length, reach):
+    """Kernel of :meth:`H4.exact_axis_columns`: eq. 11's z interval and eq. 33's Jacobian per pose.
+
+    Same operations, in the same order, as ``_horizontal``,
+    ``invariant_axis_interval``, ``within_joint_limits`` and ``_jacobian``.
+    Returns ``(lower, upper, jac)``; ``jac`` (N, 4, 4) is homogenised, NaN
+    where the pose is not conditioned and +inf in a row whose rod is
+    horizontal, the convention of :func:`kinematics.kernels.inverse_condition_batch`
+    (called separately: a compiled function that calls into another module
+    would not see that module's changes through numba's on-disk cache).
+    """
+    count = poses.shape[0]
+    lower = np.empty(count)
+    upper = np.empty(count)
+    jac = np.full((count, 4, 4), np.nan)
+    dxs = np.empty(4)
+    dys = np.empty(4)
+    drops = np.empty(4)
+    for p in range(count):
+        x, y, theta = poses[p, 0], poses[p, 1], poses[p, 3]
+        c, s = math.cos(theta), math.sin(theta)
+        lo, hi = -np.inf, np.inf
+        reachable = True
+        within = True
+        for i in range(4):
+            dx = P[i] * c + x - a[i]
+            dy = P[i] * s + y + Q[i] - b[i]
+            disc = M[i] ** 2 - dx**2 - dy**2
+            if not disc >= 0.0:
+                reachable = False
+                break
+            drop = math.sqrt(disc)
+            lo = max(lo, -drop)
+            hi = min(hi, stroke - drop)
+            if not math.hypot(dx, dy) <= reach[i]:
+                within = False
+            dxs[i], dys[i], drops[i] = dx, dy, drop
+        if not reachable:
+            lower[p], upper[p] = np.inf, -np.inf
+            continue
+        lo, hi = max(lo, axis_lo), min(hi, axis_hi)
+        lower[p], upper[p] = lo, hi
+        if not (hi - lo > 0.0 and within):
+            continue
+        for i in range(4):
+            lz = -drops[i]
+            if lz == 0.0:
+                for j in range(4):
+                    jac[p, i, j] = np.inf
+                continue
+            ang = P[i] * c * dys[i] - P[i] * s * dxs[i]
+            jac[p, i, 0] = dxs[i] / lz
+            jac[p, i, 1] = dys[i] / lz
+            jac[p, i, 2] = lz / lz
+            jac[p, i, 3] = ang / lz * inv_length
+    return lower, upper, jac

@@ -122,18 +122,29 @@ def membership(mechanism: Mechanism, poses: np.ndarray, orientation: tuple[float
             ok = row_all((q >= q_lo) & (q <= q_hi))
     else:
         ok = np.asarray(reachable, dtype=bool).copy()
-    angular = np.asarray(mechanism.angular)
-    if angular.any():
-        ang = poses[:, angular]
-        ok &= row_all((ang >= orientation[0]) & (ang <= orientation[1]))
+    ok &= _within_orientation(mechanism, poses, orientation)
     idx = np.nonzero(ok)[0]
     if idx.size:
         idx = idx[mechanism.within_joint_limits(poses[idx])]
     if idx.size:
         ic[idx] = mechanism.inverse_condition(poses[idx], length)
+    return _dexterous(ic, min_inverse_condition), ic
+
+
+def _within_orientation(mechanism: Mechanism, poses: np.ndarray,
+                        orientation: tuple[float, float]) -> np.ndarray:
+    """(N,) bool: every angular pose variable within ``orientation`` (rad)."""
+    angular = np.asarray(mechanism.angular)
+    if not angular.any():
+        return np.ones(poses.shape[0], dtype=bool)
+    ang = poses[:, angular]
+    return row_all((ang >= orientation[0]) & (ang <= orientation[1]))
+
+
+def _dexterous(ic: np.ndarray, min_inverse_condition: float) -> np.ndarray:
+    """(N,) bool: ``1/kappa`` above the dexterity limit (finite when the limit is 0)."""
     with np.errstate(invalid="ignore"):
-        inside = ic > min_inverse_condition if min_inverse_condition > 0 else np.isfinite(ic)
-    return inside, ic
+        return ic > min_inverse_condition if min_inverse_condition > 0 else np.isfinite(ic)
 
 
 # ------------------------------------------------------------------- grid
@@ -227,20 +238,29 @@ def _integrate_grid(mechanism, resolution, orientation, min_ic, length, fixed, k
     kept = []
     for start in range(0, total, CHUNK):
         poses = _grid_poses(axes, start, min(start + CHUNK, total))
+        fused = None
         if exact is None:
             weight = np.ones(poses.shape[0])
             extent = None
         else:
-            _, lower, upper = mechanism.invariant_axis_interval(poses)
-            lower = np.maximum(lower, box_lo[exact])
-            upper = np.minimum(upper, box_hi[exact])
+            fused = mechanism.exact_axis_columns(poses, box_lo[exact], box_hi[exact], length)
+            if fused is None:
+                _, lower, upper = mechanism.invariant_axis_interval(poses)
+                lower = np.maximum(lower, box_lo[exact])
+                upper = np.minimum(upper, box_hi[exact])
+            else:
+                lower, upper, ic = fused
             weight = np.clip(upper - lower, 0.0, None)
             # any z of the interval represents the column (1/kappa does not depend on it)
             feasible = weight > 0
             poses[feasible, exact] = 0.5 * (lower[feasible] + upper[feasible])
             extent = np.column_stack([lower, upper])
-        inside, ic = membership(mechanism, poses, orientation, min_ic, length,
-                                reachable=None if exact is None else weight > 0)
+        if exact is not None and fused is not None:
+            ic[~_within_orientation(mechanism, poses, orientation)] = np.nan
+            inside = _dexterous(ic, min_ic)
+        else:
+            inside, ic = membership(mechanism, poses, orientation, min_ic, length,
+                                    reachable=None if exact is None else weight > 0)
         inside &= weight > 0
         w = weight[inside]
         vals = ic[inside]

@@ -330,6 +330,7 @@ def validate(cfg: DictConfig | Config) -> Config:
         typed = cfg
     _check_budget(typed)
     _check_parallel(typed.parallel)
+    _check_kernels()
     for key in ("output_dir", "cache_dir", "dataset_dir"):
         check_writable(f"paths.{key}", getattr(typed.paths, key))
     return typed
@@ -360,6 +361,16 @@ def _check_budget(c: Config) -> None:
         raise ConfigError(f"evaluate.resolution={res} is invalid: the run is estimated at {hours:.3g} h "
                           f"> evaluate.max_hours={c.evaluate.max_hours} ({evaluations} evaluations of "
                           f"{float(res) ** n_axes:.3g} nodes at {NODES_PER_SECOND:.0e} nodes/s/worker)")
+
+
+def _check_kernels() -> None:
+    """The environment's kernel choice (``PM_DESIGN_KERNELS``, kinematics/kernels.py) is known."""
+    from kinematics import kernels
+
+    try:
+        kernels.compiled()
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
 
 
 def _check_parallel(p: ParallelConfig) -> None:
@@ -457,12 +468,24 @@ def precheck_overrides(argv: list[str]) -> None:
 
 
 # ------------------------------------------------------------- registration
-@lru_cache(maxsize=1)
+#: environment variable carrying a sweep's launch id to jobs run in other processes
+#: (joblib, submitit and SLURM launchers), set by the sweeper for the sweep's duration
+LAUNCH_ENV = "PM_DESIGN_LAUNCH_ID"
+
+
 def launch_id() -> str:
     """This launch's id: time, process id and a random token (unique even within one second).
 
-    Cached so every use within one process (run dir, sweep dir, manifests) agrees.
+    Inside a sweep it is the sweep's id (``PM_DESIGN_LAUNCH_ID``), whichever
+    process runs the job, so every job of the sweep lands in one sweep
+    directory; otherwise this process's id, cached so every use within one
+    process (run dir, sweep dir, manifests) agrees.
     """
+    return os.environ.get(LAUNCH_ENV) or _process_launch_id()
+
+
+@lru_cache(maxsize=1)
+def _process_launch_id() -> str:
     return f"{datetime.now():%Y-%m-%d_%H-%M-%S}_{os.getpid()}_{secrets.token_hex(3)}"
 
 

@@ -92,10 +92,36 @@ class DesignEvaluator:
         n_chunks = min(self.n_jobs, designs.shape[0])
         if n_chunks == 1:
             return _evaluate_chunk(self, designs)
+        _compile_kernels(self, designs)
         # contiguous equal chunks: no straggler beyond one design
         chunks = np.array_split(designs, n_chunks)
         parts = Parallel(n_jobs=n_chunks)(delayed(_evaluate_chunk)(self, c) for c in chunks)
         return np.vstack(parts)
+
+
+#: mechanisms whose compiled kernels this process has already built or loaded
+_COMPILED: set[str] = set()
+
+
+def _compile_kernels(evaluator: DesignEvaluator, designs: np.ndarray) -> None:
+    """Build the mechanism's compiled kernels here, once, before the workers start.
+
+    Why: numba compiles on first call and caches on disk; without this, every
+    worker of the first batch on a new machine compiles the same kernels at
+    the same time (~3 s each). After it, workers load them from the disk cache.
+    A tiny grid (2 nodes per axis) of the first design that builds is enough.
+    """
+    name = evaluator.mechanism.name
+    if name in _COMPILED:
+        return
+    for design in designs:
+        try:
+            mech = evaluator.mechanism.build(design)
+        except ValueError:
+            continue
+        evaluate(mech, **dict(evaluator.mechanism.evaluation_options(), resolution=2, error_estimate=False))
+        _COMPILED.add(name)
+        return
 
 
 def _evaluate_chunk(evaluator: DesignEvaluator, designs: np.ndarray) -> np.ndarray:

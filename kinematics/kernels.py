@@ -1,0 +1,243 @@
+"""Compiled per-pose kernels (numba) and the switch back to the numpy reference.
+
+Why: a workspace evaluation conditions ~10^4 small Jacobians. The numpy path
+(:mod:`kinematics.conditioning`, the mechanisms' ``_jacobian``) is vectorised
+over poses but spends most of its time allocating (N,)-sized temporaries for
+every entry of every intermediate matrix. A fused loop that keeps one pose's
+matrix in registers does the same arithmetic ~5-10x faster on one core.
+
+The numpy path stays the reference: ``PM_DESIGN_KERNELS=numpy`` in the
+environment (or :func:`reference_kernels` in code) turns every compiled path
+off, and the tests compare the two (same V and GDI to 1e-12 relative). The
+kernels are serial and free of reductions whose order depends on threads, so
+results do not depend on the number of joblib workers.
+
+Compiled code is cached on disk (``cache=True``: next to the sources, or in
+numba's user cache when that folder is read-only), so only the first run on a
+machine pays the compile time (~2 s for all kernels).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+from collections.abc import Iterator
+
+import numba
+import numpy as np
+
+#: environment variable selecting the kernels: ``numba`` (default) or ``numpy``
+KERNELS_ENV = "PM_DESIGN_KERNELS"
+KERNEL_CHOICES = ("numba", "numpy")
+_forced: list[str] = []
+
+#: decorator of every compiled kernel: on-disk cache, no GIL, IEEE semantics
+#: (no fastmath: the results must match the numpy reference)
+jit = numba.njit(cache=True, nogil=True)
+
+#: Laguerre steps of both paths (see :mod:`kinematics.conditioning`)
+LAGUERRE_STEPS = 12
+
+
+def compiled() -> bool:
+    """True when the compiled kernels are in use (the default).
+
+    Raises
+    ------
+    ValueError
+        If ``PM_DESIGN_KERNELS`` holds anything but ``numba`` or ``numpy``.
+    """
+    if _forced:
+        return _forced[-1] == "numba"
+    choice = os.environ.get(KERNELS_ENV, "numba").strip().lower() or "numba"
+    if choice not in KERNEL_CHOICES:
+        raise ValueError(f"environment variable {KERNELS_ENV} must be one of "
+                         f"{', '.join(KERNEL_CHOICES)}; got {choice!r}")
+    return choice == "numba"
+
+
+@contextlib.contextmanager
+def reference_kernels() -> Iterator[None]:
+    """Within the block, every evaluation takes the numpy reference path."""
+    _forced.append("numpy")
+    try:
+        yield
+    finally:
+        _forced.pop()
+
+
+# ------------------------------------------------------------ conditioning
+@jit
+def _det3(m, i0, i1, i2, j0, j1, j2):
+    """Determinant of rows (i0, i1, i2), columns (j0, j1, j2) of ``m`` (Laplace, row i0)."""
+    return (m[i0, j0] * (m[i1, j1] * m[i2, j2] - m[i1, j2] * m[i2, j1])
+            - m[i0, j1] * (m[i1, j0] * m[i2, j2] - m[i1, j2] * m[i2, j0])
+            + m[i0, j2] * (m[i1, j0] * m[i2, j1] - m[i1, j1] * m[i2, j0]))
+
+
+@jit
+def _laguerre_step(c, degree, x):
+    """One Laguerre step on ``c[0] x^n + ... + c[n]`` from ``x`` (0 at a root or a flat point)."""
+    p = c[0]
+    dp = 0.0
+    ddp = 0.0
+    for k in range(1, degree + 1):
+        ddp = ddp * x + 2.0 * dp
+        dp = dp * x + p
+        p = p * x + c[k]
+    if p == 0.0:
+        return 0.0
+    inv_p = 1.0 / p
+    g = dp * inv_p
+    h = g * g - ddp * inv_p
+    disc = (degree - 1) * (degree * h - g * g)
+    root = math.sqrt(disc) if disc > 0.0 else 0.0
+    denom = g + root if g >= 0.0 else g - root
+    return degree / denom if denom != 0.0 else 0.0
+
+
+@jit
+def _extreme_roots(c, degree, x_max, x_min):
+    """Largest and smallest root of a real-rooted polynomial, by Laguerre from above and below.
+
+    Both iterations run in one loop so that their divisions and square
+    roots overlap; each stops at :data:`LAGUERRE_STEPS` or once its step is
+    below the last bit of its root.
+    """
+    done_max = done_min = False
+    for _ in range(LAGUERRE_STEPS):
+        if not done_max:
+            step = _laguerre_step(c, degree, x_max)
+            x_max -= step
+            done_max = abs(step) <= 1e-9 * abs(x_max)
+        if not done_min:
+            step = _laguerre_step(c, degree, x_min)
+            x_min -= step
+            done_min = abs(step) <= 1e-9 * abs(x_min)
+        if done_max and done_min:
+            break
+    return x_max, x_min
+
+
+@jit
+def _gram4(m, gram):
+    """``gram = m^T m`` for 4 x 4 ``m`` (constant trip counts: the compiler unrolls them)."""
+    for i in range(4):
+        for j in range(i, 4):
+            s = m[0, i] * m[0, j] + m[1, i] * m[1, j] + m[2, i] * m[2, j] + m[3, i] * m[3, j]
+            gram[i, j] = s
+            gram[j, i] = s
+
+
+@jit
+def _charpoly4(g, coeffs):
+    """``coeffs[2] = e2``, ``coeffs[3] = -e3`` of a symmetric 4 x 4 ``g`` (principal minors).
+
+    Written out on scalars so that the compiler keeps the matrix in registers.
+    """
+    g00, g01, g02, g03 = g[0, 0], g[0, 1], g[0, 2], g[0, 3]
+    g11, g12, g13 = g[1, 1], g[1, 2], g[1, 3]
+    g22, g23 = g[2, 2], g[2, 3]
+    g33 = g[3, 3]
+    coeffs[2] = ((g00 * g11 - g01 * g01) + (g00 * g22 - g02 * g02) + (g00 * g33 - g03 * g03)
+                 + (g11 * g22 - g12 * g12) + (g11 * g33 - g13 * g13) + (g22 * g33 - g23 * g23))
+    # 2 x 2 minors shared by the four principal 3 x 3 minors (Laplace on their first row)
+    m12 = g11 * g22 - g12 * g12
+    m13 = g11 * g33 - g13 * g13
+    m23 = g22 * g33 - g23 * g23
+    e3 = (g00 * m12 - g01 * (g01 * g22 - g12 * g02) + g02 * (g01 * g12 - g11 * g02)
+          + g00 * m13 - g01 * (g01 * g33 - g13 * g03) + g03 * (g01 * g13 - g11 * g03)
+          + g00 * m23 - g02 * (g02 * g33 - g23 * g03) + g03 * (g02 * g23 - g22 * g03)
+          + g11 * m23 - g12 * (g12 * g33 - g23 * g13) + g13 * (g12 * g23 - g22 * g13))
+    coeffs[3] = -e3
+
+
+@jit
+def inverse_condition_small(m, gram, coeffs):
+    """``sigma_min / sigma_max`` of one finite n x n matrix ``m`` (n = 2, 3, 4).
+
+    Same algorithm as :func:`kinematics.conditioning._ratio`: the extreme
+    eigenvalues of ``G = m^T m`` from its characteristic polynomial (sums of
+    principal minors, ``det G = det(m)^2``) by Laguerre's method. ``gram``
+    (n, n) and ``coeffs`` (n + 1,) are scratch arrays. Returns a value in [0, 1].
+    """
+    n = m.shape[0]
+    if n == 4:
+        _gram4(m, gram)
+    else:
+        for i in range(n):
+            for j in range(i, n):
+                s = 0.0
+                for k in range(n):
+                    s += m[k, i] * m[k, j]
+                gram[i, j] = s
+                gram[j, i] = s
+    coeffs[0] = 1.0
+    trace = 0.0
+    for i in range(n):
+        trace += gram[i, i]
+    coeffs[1] = -trace
+    if n == 2:
+        det = m[0, 0] * m[1, 1] - m[0, 1] * m[1, 0]
+        coeffs[2] = det * det
+    elif n == 3:
+        e2 = 0.0
+        for i in range(3):
+            for j in range(i + 1, 3):
+                e2 += gram[i, i] * gram[j, j] - gram[i, j] * gram[j, i]
+        coeffs[2] = e2
+        det = _det3(m, 0, 1, 2, 0, 1, 2)
+        coeffs[3] = -det * det
+    else:
+        _charpoly4(gram, coeffs)
+        det = (m[0, 0] * _det3(m, 1, 2, 3, 1, 2, 3) - m[0, 1] * _det3(m, 1, 2, 3, 0, 2, 3)
+               + m[0, 2] * _det3(m, 1, 2, 3, 0, 1, 3) - m[0, 3] * _det3(m, 1, 2, 3, 0, 1, 2))
+        coeffs[4] = det * det
+    # start each iteration on its side of the root, as close as cheap bounds allow:
+    # sum(lambda^2) = e1^2 - 2 e2 >= lambda_max^2, and e_n / e_(n-1) <= lambda_min
+    # (e_(n-1) >= the product of the n - 1 largest eigenvalues)
+    squares = trace * trace - 2.0 * coeffs[2]
+    upper = math.sqrt(squares) if squares > 0.0 else trace
+    e_last, e_before = abs(coeffs[n]), abs(coeffs[n - 1])
+    lower = e_last / e_before if e_before > 0.0 else 0.0
+    lam_max, lam_min = _extreme_roots(coeffs, n, min(upper, trace), min(lower, upper))
+    if not lam_max > 0.0:
+        return 0.0
+    ratio = math.sqrt(max(lam_min, 0.0) / lam_max)
+    if ratio != ratio:
+        return 0.0
+    return min(max(ratio, 0.0), 1.0)
+
+
+@jit
+def inverse_condition_batch(jac, column_scale):
+    """``1/kappa`` of each matrix of ``jac`` (N, n, n) times ``diag(column_scale)``.
+
+    NaN where any entry is NaN (unreachable pose), 0 where an entry is
+    infinite (singular actuator Jacobian), as
+    :func:`kinematics.conditioning.inverse_condition_number`.
+    """
+    count, n = jac.shape[0], jac.shape[1]
+    out = np.empty(count)
+    m = np.empty((n, n))
+    gram = np.empty((n, n))
+    coeffs = np.empty(n + 1)
+    for p in range(count):
+        has_nan = False
+        has_inf = False
+        for i in range(n):
+            for j in range(n):
+                v = jac[p, i, j] * column_scale[j]
+                if v != v:
+                    has_nan = True
+                elif math.isinf(v):
+                    has_inf = True
+                m[i, j] = v
+        if has_nan:
+            out[p] = np.nan
+        elif has_inf:
+            out[p] = 0.0
+        else:
+            out[p] = inverse_condition_small(m, gram, coeffs)
+    return out

@@ -1,0 +1,91 @@
+"""Scale-out exercised: the same small sweep through every launcher gives the same dataset.
+
+``hydra/launcher=submitit_local`` runs the code path of ``submitit_slurm``
+(submitit pickles each job and runs it in its own process); Hydra's joblib
+launcher runs jobs side by side; ``parallel.backend=dask`` sends the fitness
+evaluations to a dask ``LocalCluster``. Each sweep must land in one sweep
+directory and give, table by table, the basic launcher's dataset except the
+columns that name the launch (ids, wall time, the launcher's own overrides).
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SWEEP = ["+experiment=rpr2_mixed", "+debug=fast", "optimizer.population=4", "optimizer.generations=2",
+         "objective.w_d=0,1"]
+#: columns that describe the launch, not the result
+LAUNCH_COLUMNS = {"run_id", "launch_id", "wall_time", "overrides", "source"}
+TABLES = ("best", "history", "designs", "runs")
+LAUNCHERS = {
+    "joblib": ["hydra/launcher=joblib", "hydra.launcher.n_jobs=2", "parallel.n_jobs=1"],
+    "submitit_local": ["hydra/launcher=submitit_local", "parallel.n_jobs=1"],
+    "dask_local_cluster": ["parallel.backend=dask", "parallel.n_jobs=2"],
+}
+
+
+def sweep(out: Path, extra: list[str]) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "pipeline", "-m", *SWEEP, *extra, f"paths.output_dir={out}"],
+                          cwd=ROOT, capture_output=True, text=True, timeout=300,
+                          env={**os.environ, "PYTHONUNBUFFERED": "1"})
+
+
+def read_tables(dataset: Path) -> dict[str, pd.DataFrame]:
+    tables = {}
+    for table in TABLES:
+        frame = pd.read_parquet(dataset / table)
+        keys = ["config_hash"] + (["generation"] if "generation" in frame else []) + \
+            (["sample_index"] if "sample_index" in frame else [])
+        frame = frame.drop(columns=[c for c in LAUNCH_COLUMNS if c in frame])
+        tables[table] = frame.sort_values(keys).reset_index(drop=True)
+    return tables
+
+
+@pytest.fixture(scope="module")
+def basic(tmp_path_factory) -> dict[str, pd.DataFrame]:
+    out = tmp_path_factory.mktemp("basic")
+    proc = sweep(out, [])
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return read_tables(out / "dataset")
+
+
+@pytest.mark.parametrize("launcher", sorted(LAUNCHERS))
+def test_sweep_through_launcher_gives_the_basic_launchers_dataset(launcher, basic, tmp_path):
+    proc = sweep(tmp_path, LAUNCHERS[launcher])
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    sweeps = list((tmp_path / "sweeps" / "rpr2_mixed").iterdir())
+    assert len(sweeps) == 1, sweeps  # every job in the one sweep directory
+    jobs = sorted(p.name.split("_", 1)[0] for p in sweeps[0].iterdir() if (p / "manifest.json").exists())
+    assert jobs == ["0", "1"]
+    tables = read_tables(tmp_path / "dataset")
+    for table in TABLES:
+        assert len(tables[table]) > 0
+        pd.testing.assert_frame_equal(tables[table], basic[table], check_exact=True, obj=table)
+
+
+def test_jobs_side_by_side_times_workers_above_the_cores_is_refused(tmp_path):
+    cores = os.cpu_count() or 1
+    proc = sweep(tmp_path, ["hydra/launcher=joblib", f"hydra.launcher.n_jobs={cores}", "parallel.n_jobs=2"])
+    assert proc.returncode == 2, proc.stderr
+    err = proc.stderr.strip()
+    assert "Traceback" not in err and "\n" not in err, err
+    assert err.startswith("error: job 0 (") and "parallel.n_jobs=2 is invalid" in err, err
+    assert "allowed <= " in err
+    assert not any(p.is_file() for p in tmp_path.rglob("*"))
+
+
+def test_slurm_workers_above_cpus_per_task_refused_before_submitting(tmp_path):
+    proc = sweep(tmp_path, ["hydra/launcher=submitit_slurm", "hydra.launcher.cpus_per_task=1",
+                            "parallel.n_jobs=2"])
+    assert proc.returncode == 2, proc.stderr
+    err = proc.stderr.strip()
+    assert "\n" not in err and "Traceback" not in err, err
+    assert "parallel.n_jobs=2 is invalid: allowed <= hydra.launcher.cpus_per_task=1" in err, err
+    assert not any(p.is_file() for p in tmp_path.rglob("*"))
