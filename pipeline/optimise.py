@@ -115,11 +115,13 @@ def optimise_design(mechanism: MechanismConfig, resolution: int | None, refine_f
                  reference_value, optimizer.name, value, 100 * (reference_value - value) / abs(reference_value or 1))
     history = result.history.rename(columns={f"x{j}": n for j, n in enumerate(names)})
     wall_time = history.pop("wall_time").tolist()
+    # a multi-objective run evaluates outside the scalar problem: count those too
+    multi_objective_evaluations = result.n_evaluations if algorithm.n_objectives > 1 else 0
     best = _best_row(mechanism, resolution, refine_factor, objective, x, value, rows)
     best.update(optimizer_value=optimizer_value, found_by=found_by, polish_improvement=polish_improvement,
                 reference_value=float(reference_value),
                 reference_gap=float((reference_value - value) / abs(reference_value)) if reference_value else np.nan,
-                n_evaluations=int(scalar.n_evaluations + result.n_evaluations * (algorithm.n_objectives > 1)))
+                n_evaluations=int(scalar.n_evaluations + multi_objective_evaluations))
     best.update({f"{n}_reference": float(v) for n, v in zip(names, reference_x)})
     best.update(flat_intervals(scalar, x, value, names))
     return {"history": history, "best": best, "front": front, "wall_time": wall_time}

@@ -42,14 +42,15 @@ def flat_intervals(problem: Problem, x: np.ndarray, f: float, names: list[str], 
             c[j] = v
             probes.append(c)
             owners.append(j)
-    objective = problem(np.array(probes)) if probes else np.empty(0)
+    probe_array = np.array(probes) if probes else np.empty((0, len(x)))
+    objective = problem(probe_array) if probes else np.empty(0)
     owners_arr = np.array(owners)
     same = np.abs(objective - f) <= rtol * max(abs(f), 1e-300)
     out: dict[str, float | str] = {}
     flat = []
     for j, name in enumerate(names):
         mine = owners_arr == j
-        vals = np.array(probes)[mine, j] if mine.any() else np.empty(0)
+        vals = probe_array[mine, j]
         eq = same[mine]
         order = np.argsort(vals)
         vals, eq = vals[order], eq[order]

@@ -31,3 +31,23 @@ def test_upper_hull_drops_concave_points():
     front = np.array([[1.0, 0.0], [0.6, 0.3], [0.55, 0.5], [0.0, 1.0]])  # (gdi, suri)
     # in the (SURI, GDI) plane (0.3, 0.6) lies below the chord from (0, 1) to (0.5, 0.55)
     assert _upper_hull(front).tolist() == [[1.0, 0.0], [0.55, 0.5], [0.0, 1.0]]
+
+
+def test_independent_studies_run_side_by_side_and_are_cached(tmp_path):
+    from pipeline.reproduce import Reproduction
+
+    tiny = ["+experiment=rpr2_mixed", "+debug=fast", "optimizer.population=4", "optimizer.generations=2"]
+    specs = [(f"wd{w}", [*tiny, f"objective.w_d={w}"]) for w in (0.0, 1.0)]
+    side = Reproduction(tmp_path / "doc", tmp_path / "outputs")
+    first = side.studies(specs)
+    assert side.computed >= 4  # sample, evaluate, optimise of each study (sample may be shared)
+    again = Reproduction(tmp_path / "doc", tmp_path / "outputs")
+    second = again.studies(specs)
+    assert again.computed == 0  # every stage from the cache
+    alone = Reproduction(tmp_path / "doc2", tmp_path / "other")
+    one_by_one = [alone.study(name, overrides) for name, overrides in specs]
+    for (b1, h1), (b2, h2), (b3, h3) in zip(first, second, one_by_one):
+        assert b1.equals(b2) and h1.equals(h2)
+        assert b1.equals(b3)  # one worker per study or two: the same results
+        assert h1.equals(h3)
+    assert first[0][0]["w_d"] == 0.0 and first[1][0]["w_d"] == 1.0

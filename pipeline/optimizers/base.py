@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import logging
 import math
+import os
+import sys
 import time
 from abc import ABC, abstractmethod
 from collections.abc import Callable
@@ -173,9 +175,6 @@ class History:
 
 def progress_bars_enabled() -> bool:
     """Bars only on an interactive terminal (not in CI, SLURM, pipes or log files)."""
-    import os
-    import sys
-
     return sys.stderr.isatty() and os.environ.get("CI") is None
 
 
@@ -219,8 +218,9 @@ class Optimizer(ABC):
     name: ClassVar[str]
     Config: ClassVar[type[OptimizerConfig]]
     n_objectives: ClassVar[int] = 1
-    #: evaluations a run will take, for progress and for the cost estimate
+
     def expected_evaluations(self) -> int:
+        """Evaluations a run will take (for progress and for the cost estimate)."""
         return 0
 
     def __init__(self, config: OptimizerConfig) -> None:
