@@ -43,7 +43,7 @@ from pipeline.config import Config, launch_id, validate
 from pipeline.errors import ConfigError, RunError
 from pipeline.evaluate import evaluate_designs
 from pipeline.io import git_commit, write_parquet, write_text
-from pipeline.objective import EVALUATION_FIELDS, objective_values
+from pipeline.objective import EVALUATION_FIELDS, objective_values, shutdown_pools
 from pipeline.optimise import optimise_design
 from pipeline.plot import plot_convergence, plot_front, plot_workspace, symbol
 from pipeline.sample import sample_designs
@@ -245,7 +245,8 @@ def remove_if_empty(path: Path, levels: int = 3) -> None:
 
 
 def shutdown_workers() -> None:
-    """End joblib's reusable worker processes (after Ctrl-C, so none outlives the run)."""
+    """End the fitness workers and joblib's reusable ones (after Ctrl-C, so none outlives the run)."""
+    shutdown_pools(kill=True)
     try:
         from joblib.externals.loky import get_reusable_executor
 
