@@ -11,6 +11,7 @@ last run from an empty cache and of the last run from a full cache
 from __future__ import annotations
 
 import argparse
+import copy
 import json
 import logging
 import math
@@ -24,6 +25,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 from hydra import compose, initialize_config_dir
+from hydra.core.override_parser.overrides_parser import OverridesParser
+from omegaconf import DictConfig, OmegaConf
 from joblib import Parallel, delayed
 
 from kinematics import MECHANISMS, get_mechanism
@@ -129,6 +132,7 @@ class Reproduction:
         self.h4_frames: dict[str, pd.DataFrame] = {}  # every H4 study's runs (default reading)
         self.optima: dict[str, pd.Series] = {}  # every study's optimum, for the 4x table
         self.computed = 0  # stages computed (cache misses) by the studies
+        self._bases: dict[tuple[str, ...], DictConfig] = {}  # composed configs by group choices
         # this document's run directories (a new one per Reproduction, even within one process)
         self.runs_dir = output_dir / "reproduction" / f"{launch_id()}-{secrets.token_hex(2)}"
         register_configs()
@@ -136,6 +140,31 @@ class Reproduction:
     def study(self, name: str, overrides: list[str]) -> tuple[pd.Series, pd.DataFrame]:
         """Run one study through the cached pipeline; its best row and history."""
         return self.studies([(name, overrides)])[0]
+
+    def memo(self, func):
+        """``func`` cached in the stage cache (the document's own computations: evaluations,
+        readings tables), so a second run only reads them back."""
+        return cached(func, str(self.output_dir / "cache"))
+
+    def compose(self, overrides: list[str]) -> DictConfig:
+        """Hydra's config for ``overrides``, composing once per set of group choices.
+
+        Why: a Hydra compose costs ~0.15 s and the document runs ~75 studies
+        that differ only in values (w_d, seed, ...). Group choices
+        (``+experiment=``, ``+reading=``: keys without a dot) are composed by
+        Hydra and kept; value overrides (dotted keys) are then applied the way
+        Hydra applies them after composing (``OmegaConf.update`` of the parsed
+        value). ``tests/test_reproduce.py`` checks the result equals a full compose.
+        """
+        groups = tuple(o for o in overrides if "." not in o.split("=", 1)[0])
+        values = [o for o in overrides if "." in o.split("=", 1)[0]]
+        if groups not in self._bases:
+            with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
+                self._bases[groups] = compose(config_name="config", overrides=list(groups))
+        cfg = copy.deepcopy(self._bases[groups])
+        for override in OverridesParser.create().parse_overrides(values):
+            OmegaConf.update(cfg, override.key_or_group, override.value(), merge=True)
+        return cfg
 
     def studies(self, specs: list[tuple[str, list[str]]]) -> list[tuple[pd.Series, pd.DataFrame]]:
         """Run independent studies side by side (cached); each one's best row and history.
@@ -147,10 +176,8 @@ class Reproduction:
         side_by_side = min(STUDY_JOBS, len(specs))
         configs = []
         for name, overrides in specs:
-            with initialize_config_dir(config_dir=str(CONF), version_base="1.3"):
-                cfg = compose(config_name="config", overrides=[
-                    *overrides, f"paths.output_dir={self.output_dir}", "plot.enabled=false",
-                    f"parallel.n_jobs={2 if side_by_side == 1 else 1}"])
+            cfg = self.compose([*overrides, f"paths.output_dir={self.output_dir}", "plot.enabled=false",
+                                f"parallel.n_jobs={2 if side_by_side == 1 else 1}"])
             configs.append((cfg, self.runs_dir / name))
         if side_by_side == 1:
             done = [(run_study(cfg, run_dir), 0) for cfg, run_dir in configs]  # counted by main's handler
@@ -254,12 +281,12 @@ def h4_tables(r: Reproduction) -> dict[str, pd.Series]:
             vals = frame[column].to_numpy()
             rows.append([label, key, p[key], f"{vals.mean():.4g} ± {vals.std():.2g}", rel(vals.mean(), p[key])])
     paper_design = get_mechanism("h4", d=13.52484, h=13.88781, Qz=35.18892)
-    ev_paper = evaluate(paper_design)
+    ev_paper = r.memo(evaluate)(paper_design)
     table2 = get_mechanism("h4", d=1.00008, h=1.09692, Qz=35.48742)
     length_effect = [[f"{label} = {length:.3g} cm", round(ev.volume, 1), round(ev.gdi, 4)]
                      for label, length in (("h (our default)", table2.h), ("sqrt(3) Qz (a rod)", 3**0.5 * table2.Qz),
                                            ("100 cm", 100.0))
-                     for ev in [evaluate(table2, length=length, error_estimate=False)]]
+                     for ev in [r.memo(evaluate)(table2, length=length, error_estimate=False)]]
     positions = [[label, bound_positions(row, "h4")] for label, row in best_runs.items()]
     r.add(f"""
 ### Tables 1-3: optima of V, GDI and the mixed index (30 × 150 GA, seeds {list(SEEDS)})
@@ -383,16 +410,16 @@ def tricept(r: Reproduction) -> None:
                "paper, a and b swapped (a=200, b=300.062, d=20)": (200.0, 300.062, 20.0)}
     for label, (a, b, d) in designs.items():
         mech = get_mechanism("tricept", a=a, b=b, d=d)
-        grid = evaluate(mech, resolution=48, error_estimate=False)
-        polar = evaluate(mech, method="polar", resolution=32, error_estimate=False)
+        grid = r.memo(evaluate)(mech, resolution=48, error_estimate=False)
+        polar = r.memo(evaluate)(mech, method="polar", resolution=32, error_estimate=False)
         rows.append([label, 944.2176, f"{grid.volume:.1f}", f"{polar.volume:.1f}", rel(grid.volume, 944.2176),
                      f"{grid.inverse_condition_min:.2f}-{grid.inverse_condition_max:.2f}"])
     runs = r.studies([(f"tricept_max_volume_seed{s}", ["+experiment=tricept_max_volume", f"optimizer.seed={s}"])
                       for s in SEEDS[:2]])
     best = max((b for b, _ in runs), key=lambda b: b["objective_value"])
     opt = get_mechanism("tricept", a=best["param_a"], b=best["param_b"], d=best["param_d"])
-    grid = evaluate(opt, resolution=48, error_estimate=False)
-    polar = evaluate(opt, method="polar", resolution=32, error_estimate=False)
+    grid = r.memo(evaluate)(opt, resolution=48, error_estimate=False)
+    polar = r.memo(evaluate)(opt, method="polar", resolution=32, error_estimate=False)
     rows.append([f"our GA optimum (a={best['param_a']:.1f}, b={best['param_b']:.1f}, d={best['param_d']:.1f})",
                  "-", f"{grid.volume:.1f}", f"{polar.volume:.1f}", "-",
                  f"{grid.inverse_condition_min:.2f}-{grid.inverse_condition_max:.2f}"])
@@ -422,12 +449,12 @@ Fig. 3-4: ψ-θ slices of the optimum's workspace at three elevations c (inside:
 
 
 def _tricept_figures(r: Reproduction, mech) -> None:
-    coarse = evaluate(mech, resolution=16, return_samples=True, error_estimate=False)
+    coarse = r.memo(evaluate)(mech, resolution=16, return_samples=True, error_estimate=False)
     c_in = coarse.samples[coarse.inside, 0]
     levels = np.quantile(c_in, [0.2, 0.5, 0.8]) if c_in.size else [500.0, 600.0, 700.0]
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.5))
     for ax, c in zip(axes, levels):
-        ev = evaluate(mech, fixed={"c": float(c)}, resolution=90, return_samples=True, error_estimate=False)
+        ev = r.memo(evaluate)(mech, fixed={"c": float(c)}, resolution=90, return_samples=True, error_estimate=False)
         ic = np.where(ev.inside, ev.inverse_conditions, np.nan)
         sc = ax.scatter(ev.samples[:, 1], ev.samples[:, 2], c=ic, s=5, marker="s", cmap="magma", vmin=0)
         ax.set_title(f"c = {c:.0f} mm, area {ev.volume:.2f} rad²")
@@ -497,7 +524,7 @@ def rpr3(r: Reproduction) -> None:
     fig, axes = plt.subplots(1, 4, figsize=(18, 4.5))
     for ax, deg in zip(axes, (15, 30, 45, 60)):
         phi = math.radians(deg)
-        ev = evaluate(m, orientation=(phi, phi), min_inverse_condition=0.0, resolution=240,
+        ev = r.memo(evaluate)(m, orientation=(phi, phi), min_inverse_condition=0.0, resolution=240,
                       return_samples=True, error_estimate=False)
         exact = m.exact_area(phi)
         area_rows.append([deg, round(exact, 1), round(ev.volume, 1), rel(ev.volume, exact)])
@@ -568,7 +595,7 @@ def rpr2(r: Reproduction) -> None:
     inside_alg = np.all((q_alg >= 6.0) & (q_alg <= 9.6), axis=1)
     inside_dh = np.all((q_dh >= 6.0) & (q_dh <= 9.6), axis=1)
     exact = m.exact_area()
-    ev = evaluate(m, min_inverse_condition=0.0)
+    ev = r.memo(evaluate)(m, min_inverse_condition=0.0)
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.5))
     for ax, inside, label in ((axes[0], inside_alg, "algebraic (eq. 1-2)"), (axes[1], inside_dh, "DH (eq. 10)")):
         ax.scatter(grid[inside, 0], grid[inside, 1], s=0.5, c="tab:blue", marker="s")
@@ -609,7 +636,7 @@ def readings_study(r: Reproduction, default_sweep: pd.DataFrame) -> None:
 
     cache = str(r.output_dir / "cache")
     h4_all = rd.h4_readings()
-    h4 = rd.h4_table(h4_all)
+    h4 = r.memo(rd.h4_table)(h4_all)
     default = rd.Reading("h4", (("base", "scaled"), ("homogenising", "h")), (-45.0, 45.0))
     shown = pd.concat([h4.head(8), h4[h4["reading"] == default.label]]).drop_duplicates("reading")
     names = list(rd.H4_PAPER)
@@ -622,7 +649,7 @@ def readings_study(r: Reproduction, default_sweep: pd.DataFrame) -> None:
     paper_x = {"max V": np.array([rd.H4_PAPER["Table 1 (max V)"][k] / 100 for k in ("d", "h", "Qz")]),
                "max GDI": np.array([rd.H4_PAPER["Table 2 (max GDI)"][k] / 100 for k in ("d", "h", "Qz")]),
                "η(0.5)": np.array([rd.H4_PAPER["Table 3 (w_d = 0.5)"][k] / 100 for k in ("d", "h", "Qz")])}
-    checks = [rd.check_reading(c, paper_x, cache) for c in candidates]
+    checks = [r.memo(rd.check_reading)(c, paper_x, cache) for c in candidates]
     check_rows = [[c["reading"], f"{c['max V paper/optimum']:.3f}", f"{c['max GDI paper/optimum']:.3f}",
                    f"{c['η(0.5) paper/optimum']:.3f}", f"{c['spearman V-GDI']:+.2f}",
                    f"{c['GDI at max-V / max GDI']:.2f}",
@@ -662,7 +689,7 @@ def readings_study(r: Reproduction, default_sweep: pd.DataFrame) -> None:
         plt.close(fig)
     # Tricept
     tri_all = rd.tricept_readings()
-    tri = rd.tricept_table(tri_all)
+    tri = r.memo(rd.tricept_table)(tri_all)
     tri_default = rd.Reading("tricept", (("cone_joints", "both"), ("cone_reference", "normal"), ("offset_side", 1),
                                          ("tilt_limit", None), ("homogenising", "arm")), (-90.0, 90.0))
     tri_shown = pd.concat([tri.head(8), tri[tri["reading"] == tri_default.label]]).drop_duplicates("reading")
@@ -678,7 +705,7 @@ def readings_study(r: Reproduction, default_sweep: pd.DataFrame) -> None:
     tilt_note = (f"1/κ {tilt_row['1/κ min']:.2f}-{tilt_row['1/κ max']:.2f} for the paper's design, the readings "
                  f"whose smallest 1/κ comes nearest the paper's 0.57")
     tri_x = {"max V": np.array([rd.TRICEPT_PAPER[k] for k in ("a", "b", "d")])}
-    tri_checks = [rd.check_reading(c, tri_x, cache, sweep=(0.0,)) for c in tri_candidates]
+    tri_checks = [r.memo(rd.check_reading)(c, tri_x, cache, sweep=(0.0,)) for c in tri_candidates]
     tri_check_rows = [[c["reading"], f"{c['max V optimum']:.1f}",
                        ", ".join(f"{v:.4g}" for v in c["max V design"]), f"{c['max V paper/optimum']:.3f}",
                        f"{c['spearman V-GDI']:+.2f}"] for c in tri_checks]
@@ -847,7 +874,7 @@ def extensions(r: Reproduction, h4_sweep_table: pd.DataFrame, best_runs: dict[st
     for mech, label in ((h4, "H4 (w_d = 0.5 optimum)"), (tri, "Tricept (a, b, d) = (250, 400, 100)")):
         for factor in (0.25, 0.5, 1.0, 2.0, 4.0):
             length = factor * mech.characteristic_length
-            ev = evaluate(mech, length=length, error_estimate=False)
+            ev = r.memo(evaluate)(mech, length=length, error_estimate=False)
             sens_rows.append([label, f"{factor:g} × {mech.characteristic_length:.3g} = {length:.3g}",
                               ev.gdi, ev.volume])
 

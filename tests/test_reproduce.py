@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from kinematics import get_mechanism
 from pipeline.reproduce import THESIS, _upper_hull, thesis_jacobian_program
@@ -51,3 +52,25 @@ def test_independent_studies_run_side_by_side_and_are_cached(tmp_path):
         assert b1.equals(b3)  # one worker per study or two: the same results
         assert h1.equals(h3)
     assert first[0][0]["w_d"] == 0.0 and first[1][0]["w_d"] == 1.0
+
+
+@pytest.mark.parametrize("overrides", [
+    ["+experiment=h4_mixed", "objective.w_d=0.25", "optimizer.seed=2", "parallel.n_jobs=1"],
+    ["+experiment=h4_mixed", "+reading=h4_paper_gdi", "objective.w_d=0.7", "optimizer.seed=0"],
+    ["+experiment=tricept_max_volume", "objective.name=mixed", "objective.w_d=0.5", "optimizer.population=20",
+     "optimizer.generations=30", "plot.enabled=false"],
+    ["+experiment=h4_max_volume", "optimizer.seed=1", "paths.output_dir=/tmp/x"],
+])
+def test_reproduction_compose_equals_hydras(overrides, tmp_path):
+    from hydra import compose, initialize_config_dir
+    from omegaconf import OmegaConf
+
+    from pipeline.config import CONFIG_DIR
+    from pipeline.reproduce import Reproduction
+
+    r = Reproduction(tmp_path / "doc", tmp_path / "out")
+    r.compose([o for o in overrides if "." not in o.split("=", 1)[0]])  # a base kept from another study
+    ours = r.compose(overrides)
+    with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3"):
+        theirs = compose(config_name="config", overrides=overrides)
+    assert OmegaConf.to_yaml(ours) == OmegaConf.to_yaml(theirs)
