@@ -452,15 +452,19 @@ def _tricept_figures(r: Reproduction, mech) -> None:
     coarse = r.memo(evaluate)(mech, resolution=16, return_samples=True, error_estimate=False)
     c_in = coarse.samples[coarse.inside, 0]
     levels = np.quantile(c_in, [0.2, 0.5, 0.8]) if c_in.size else [500.0, 600.0, 700.0]
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.5))
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.5), layout="constrained")
+    resolution = 90
     for ax, c in zip(axes, levels):
-        ev = r.memo(evaluate)(mech, fixed={"c": float(c)}, resolution=90, return_samples=True, error_estimate=False)
-        ic = np.where(ev.inside, ev.inverse_conditions, np.nan)
-        sc = ax.scatter(ev.samples[:, 1], ev.samples[:, 2], c=ic, s=5, marker="s", cmap="magma", vmin=0)
+        ev = r.memo(evaluate)(mech, fixed={"c": float(c)}, resolution=resolution, return_samples=True,
+                              error_estimate=False)
+        ic = np.where(ev.inside, ev.inverse_conditions, np.nan).reshape(resolution, resolution)
+        psi = ev.samples[::resolution, 1]  # C order over (psi, theta): psi varies slowest
+        theta = ev.samples[:resolution, 2]
+        mesh = ax.pcolormesh(psi, theta, ic.T, shading="nearest", cmap="magma", vmin=0)
         ax.set_title(f"c = {c:.0f} mm, area {ev.volume:.2f} rad²")
         ax.set_xlabel("ψ [rad]")
         ax.set_ylabel("θ [rad]")
-        fig.colorbar(sc, ax=ax, label="1/κ")
+        fig.colorbar(mesh, ax=ax, label="1/κ [1]")
     fig.savefig(r.figures / "tricept_fig3_workspace.png", dpi=100, bbox_inches="tight")
     plt.close(fig)
 
