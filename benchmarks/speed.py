@@ -12,7 +12,7 @@ ratio is measured side by side in this one run, on this machine:
 3. cost against the resolution (H4);
 4. the main job (``python -m pipeline +experiment=h4_mixed``) in a fresh
    process: cold (empty stage cache and empty numba cache, so imports and
-   compilation count) and warm;
+   compilation count) and warm; ``h4_design`` against the paper GA;
 5. a sweep of the same small study with 1, 2 and 4 jobs, through the basic
    launcher (jobs one after the other, 2 workers each) and Hydra's joblib
    launcher (2 jobs side by side, 1 worker each);
@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import math
 import os
 import shutil
@@ -152,6 +153,22 @@ def main_job_times(scratch: Path) -> dict[str, float]:
     return {"cold": cold, "warm": warm}
 
 
+def preset_against_paper_ga(scratch: Path) -> list[list[str]]:
+    """``h4_design`` (CMA-ES + polish) against the paper GA (``h4_mixed`` without its reference run),
+    each from an empty stage cache: the optimise stage (from the manifests) and the whole process."""
+    rows = []
+    for label, args in (("paper GA 30 x 150 (h4_mixed, optimizer.reference=false)",
+                         ["+experiment=h4_mixed", "optimizer.reference=false"]),
+                        ("h4_design (IPOP-CMA-ES + polish)", ["+experiment=h4_design"])):
+        out = scratch / label.split()[0]
+        wall = run_cli([*args, "plot.enabled=false"], out)
+        manifest = json.loads(next(out.rglob("manifest.json")).read_text())
+        rows.append([label, f"{manifest['timings']['optimise']:.2f}", f"{wall:.1f}"])
+    rows.append(["ratio", f"{float(rows[1][1]) / float(rows[0][1]):.2f}",
+                 f"{float(rows[1][2]) / float(rows[0][2]):.2f}"])
+    return rows
+
+
 def sweep_times(scratch: Path) -> list[list[str]]:
     rows = []
     base_per_job = None
@@ -206,6 +223,9 @@ def main() -> None:
             sections.append(f"## 4. The main job, `python -m pipeline +experiment=h4_mixed`, fresh process\n\n"
                             f"cold (empty stage cache, empty numba cache: imports and compilation count) "
                             f"{main_job['cold']:.1f} s (goal <= 12 s); warm {main_job['warm']:.1f} s (goal <= 3 s)")
+            sections.append("## 4b. The fast preset against the paper GA, seconds (empty stage cache)\n\n"
+                            + markdown_table(["run", "optimise stage", "whole process"],
+                                             preset_against_paper_ga(scratch)))
             rows = sweep_times(scratch)
             sections.append("## 5. Sweeps of a small study (`h4_design`, 16 samples, 120 evaluations), wall seconds\n\n"
                             + markdown_table(["jobs", "basic launcher, 2 workers per job",

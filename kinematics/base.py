@@ -29,6 +29,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from kinematics import kernels
 from kinematics.algebra import newton_polish, unique_rows, wrap_angle
 from kinematics.conditioning import inverse_condition_number
 
@@ -153,8 +154,20 @@ class Mechanism(ABC):
             Values in [0, 1]: 1 is isotropic, 0 singular; NaN where unreachable.
         """
         poses = self._check_poses(poses)
+        scale = self.angular_scale(length)
+        compiled = self._compiled_jacobian(poses, scale) if kernels.compiled() else None
+        if compiled is not None:
+            return kernels.inverse_condition_batch(compiled, np.ones(self.dof))
         jac = self.jacobian(poses)
-        return inverse_condition_number(jac, self.angular_scale(length))
+        return inverse_condition_number(jac, scale)
+
+    def _compiled_jacobian(self, poses: np.ndarray, column_scale: np.ndarray) -> np.ndarray | None:
+        """Optional compiled ``jacobian(poses) * column_scale`` (N, dof, dof), same NaN/inf rows.
+
+        ``None`` (the default): the numpy kernels, the reference the compiled
+        one is tested against (``tests/test_kernels.py``).
+        """
+        return None
 
     def angular_scale(self, length: float | None = None) -> np.ndarray:
         """Column scale ``s`` (shape (dof,)) that homogenises the Jacobian.

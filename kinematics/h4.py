@@ -265,6 +265,11 @@ class H4(Mechanism):
                                         inv_length, reach)
         return lower, upper, kernels.inverse_condition_batch(jac, np.ones(4))
 
+    def _compiled_jacobian(self, poses: np.ndarray, column_scale: np.ndarray) -> np.ndarray:
+        """Eq. 33's Jacobian times ``diag(column_scale)``, compiled (see :func:`_h4_jacobians`)."""
+        return _h4_jacobians(np.ascontiguousarray(poses), self.a, self.b, self.P, self.Q, self.M,
+                             np.ascontiguousarray(column_scale, dtype=float))
+
     def within_joint_limits(self, poses: np.ndarray) -> np.ndarray:
         """Rod-to-vertical angle within ``ball_joint_limit`` (N,) bool; all True without a limit.
 
@@ -475,3 +480,36 @@ def _h4_columns(poses, a, b, P, Q, M, stroke, axis_lo, axis_hi, inv_length, reac
             jac[p, i, 2] = lz / lz
             jac[p, i, 3] = ang / lz * inv_length
     return lower, upper, jac
+
+
+@kernels.jit
+def _h4_jacobians(poses, a, b, P, Q, M, column_scale):
+    """Eq. 33 per pose, the same operations as ``_horizontal`` and ``_jacobian``, times the column scale.
+
+    NaN rows where a rod cannot reach (imaginary root of eq. 11), +inf in a
+    row whose rod is horizontal (``L_z = 0``), as the numpy kernel.
+    """
+    count = poses.shape[0]
+    jac = np.empty((count, 4, 4))
+    for p in range(count):
+        x, y, theta = poses[p, 0], poses[p, 1], poses[p, 3]
+        c, s = math.cos(theta), math.sin(theta)
+        for i in range(4):
+            dx = P[i] * c + x - a[i]
+            dy = P[i] * s + y + Q[i] - b[i]
+            disc = M[i] ** 2 - dx**2 - dy**2
+            if not disc >= 0.0:
+                for j in range(4):
+                    jac[p, i, j] = np.nan
+                continue
+            lz = -math.sqrt(disc)
+            if lz == 0.0:
+                for j in range(4):
+                    jac[p, i, j] = np.inf
+                continue
+            ang = P[i] * c * dy - P[i] * s * dx
+            jac[p, i, 0] = dx / lz * column_scale[0]
+            jac[p, i, 1] = dy / lz * column_scale[1]
+            jac[p, i, 2] = lz / lz * column_scale[2]
+            jac[p, i, 3] = ang / lz * column_scale[3]
+    return jac

@@ -224,20 +224,28 @@ def inverse_condition_batch(jac, column_scale):
     gram = np.empty((n, n))
     coeffs = np.empty(n + 1)
     for p in range(count):
+        total = 0.0
+        for i in range(n):
+            for j in range(n):
+                v = jac[p, i, j] * column_scale[j]
+                total += v
+                m[i, j] = v
+        if math.isfinite(total):  # every entry finite: the common case, one test
+            out[p] = inverse_condition_small(m, gram, coeffs)
+            continue
         has_nan = False
         has_inf = False
         for i in range(n):
             for j in range(n):
-                v = jac[p, i, j] * column_scale[j]
+                v = m[i, j]
                 if v != v:
                     has_nan = True
                 elif math.isinf(v):
                     has_inf = True
-                m[i, j] = v
         if has_nan:
             out[p] = np.nan
         elif has_inf:
             out[p] = 0.0
-        else:
+        else:  # finite entries whose sum overflowed
             out[p] = inverse_condition_small(m, gram, coeffs)
     return out

@@ -8,7 +8,6 @@ import hydra
 from omegaconf import DictConfig
 
 from pipeline.config import CONFIG_DIR, precheck_overrides, register_configs
-from pipeline.objective import start_workers
 from pipeline.run import run_from_hydra
 
 register_configs()
@@ -21,9 +20,7 @@ def main(cfg: DictConfig) -> dict:
 
 def entry() -> None:
     """The console script: the one-line precheck of a single run, then Hydra."""
-    checked = precheck_overrides(sys.argv[1:])
-    if checked is not None:  # a valid single run: its workers start while Hydra sets up
-        start_workers(checked.parallel.n_jobs, checked.parallel.backend)
+    precheck_overrides(sys.argv[1:])
     main()
 
 

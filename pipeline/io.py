@@ -158,10 +158,15 @@ def write_parquet(df: pd.DataFrame, path: Path, config: dict, units: dict[str, s
 
 def write_text(path: Path, text: str) -> Path:
     """Write a small text file atomically; :class:`RunError` (one line) if it cannot be written."""
+    return write_bytes(path, text.encode())
+
+
+def write_bytes(path: Path, data: bytes) -> Path:
+    """Write a file atomically (temporary file, then rename); :class:`RunError` (one line) on failure."""
     path = Path(path)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
     try:
-        tmp.write_text(text)
+        tmp.write_bytes(data)
         os.replace(tmp, path)
     except OSError as exc:
         if tmp.exists():

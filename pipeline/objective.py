@@ -173,21 +173,6 @@ def shutdown_pools(kill: bool = False) -> None:
 atexit.register(shutdown_pools)
 
 
-def start_workers(n_jobs: int, backend: str = "loky") -> None:
-    """Start the loky workers now, without waiting for them (the first batch then finds them ready).
-
-    Why: a worker takes ~1.5 s to start and import what a design evaluation
-    needs; started before Hydra sets up the run, that overlaps with it.
-    """
-    if n_jobs > 1 and backend == "loky":
-        for _ in range(n_jobs):
-            worker_pool(n_jobs).submit(_prepare_worker)
-
-
-def _prepare_worker() -> None:
-    """Nothing: unpickling this function imports this module and :mod:`kinematics` in the worker."""
-
-
 #: mechanisms whose compiled kernels this process has already built or loaded
 _COMPILED: set[str] = set()
 

@@ -16,6 +16,7 @@ change the backend of a notebook.
 
 from __future__ import annotations
 
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -56,6 +57,30 @@ def _save(fig: Figure, path: Path, plot=None) -> Path:
 def symbol(name: str) -> str:
     """Greek symbol of a pose variable or objective (θ, ψ, φ, η), else the name."""
     return _SYMBOLS.get(name, name)
+
+
+def run_figures(mechanism, objective, optimizer, plot, optimum: dict) -> dict[str, bytes]:
+    """The figures of one run, as file name -> content: convergence, workspace and 1/κ slices of
+    the optimum, and the Pareto front of a multi-objective optimiser.
+
+    Drawn in a temporary folder and returned as bytes so that the pipeline can
+    cache this stage like the others (a second identical run draws nothing).
+    ``mechanism``, ``objective``, ``optimizer`` and ``plot`` are the run's
+    config sections (``pipeline.config``); ``optimum`` the optimise stage's result.
+    """
+    design = [optimum["best"][n] for n in mechanism.design.names]
+    mech = mechanism.build(design)
+    orientation = mechanism.orientation_rad() or mech.default_orientation
+    what = f"{mech.name}, {objective.name}" + (f", w_d = {objective.w_d:g}" if objective.name == "mixed" else "")
+    unit = optimum["best"]["objective_unit"]
+    with tempfile.TemporaryDirectory() as tmp:
+        directory = Path(tmp)
+        plot_convergence(optimum["history"], directory / "convergence.png",
+                         f"{optimizer.name} convergence ({what})", f"{symbol(objective.name)} [{unit}]", plot)
+        plot_workspace(mech, orientation, mechanism.min_inverse_condition, mechanism.length, directory, what, plot)
+        if optimum["front"] is not None:
+            plot_front(optimum["front"], list(optimizer.objectives), directory / "pareto.png", what, plot)
+        return {p.name: p.read_bytes() for p in sorted(directory.iterdir()) if not p.name.startswith(".")}
 
 
 def plot_convergence(history: pd.DataFrame, path: Path, title: str, ylabel: str, plot=None) -> Path:

@@ -42,10 +42,10 @@ from pipeline.cache import CODE_VERSION, cached
 from pipeline.config import Config, launch_id, validate
 from pipeline.errors import ConfigError, RunError
 from pipeline.evaluate import evaluate_designs
-from pipeline.io import git_commit, write_parquet, write_text
+from pipeline.io import git_commit, write_bytes, write_parquet, write_text
 from pipeline.objective import EVALUATION_FIELDS, objective_values, shutdown_pools
 from pipeline.optimise import optimise_design
-from pipeline.plot import plot_convergence, plot_front, plot_workspace, symbol
+from pipeline.plot import run_figures
 from pipeline.sample import sample_designs
 
 log = logging.getLogger(__name__)
@@ -214,22 +214,14 @@ def _with_keys(frame: pd.DataFrame, keys: dict) -> pd.DataFrame:
 
 
 def _plots(c: Config, optimum: dict, run_dir: Path) -> dict[str, Path]:
-    mech_cfg = c.mechanism
-    design = [optimum["best"][n] for n in mech_cfg.design.names]
-    mech = mech_cfg.build(design)
-    orientation = mech_cfg.orientation_rad() or mech.default_orientation
-    what = f"{mech.name}, {c.objective.name}" + (f", w_d = {c.objective.w_d:g}" if c.objective.name == "mixed"
-                                                 else "")
-    unit = optimum["best"]["objective_unit"]
-    out = {"convergence": plot_convergence(optimum["history"], run_dir / "convergence.png",
-                                           f"{c.optimizer.name} convergence ({what})",
-                                           f"{symbol(c.objective.name)} [{unit}]", c.plot)}
-    ws, ic = plot_workspace(mech, orientation, mech_cfg.min_inverse_condition, mech_cfg.length, run_dir,
-                            what, c.plot)
-    out.update(workspace=ws, inverse_condition=ic)
-    if optimum["front"] is not None:
-        out["pareto"] = plot_front(optimum["front"], list(c.optimizer.objectives), run_dir / "pareto.png",
-                                   what, c.plot)
+    """The run's figures: a cached stage (drawn once per result), written into ``run_dir``."""
+    figures = _stage("plot", run_figures, c.paths.cache_dir, c.mechanism, c.objective, c.optimizer, c.plot,
+                     optimum)
+    out = {}
+    for name, data in figures.items():
+        path = write_bytes(run_dir / name, data)
+        if path.suffix == ".png":
+            out[path.stem] = path
     return out
 
 

@@ -118,3 +118,17 @@ def test_unknown_kernel_choice_is_one_line_before_any_work(tmp_path):
     assert proc.stderr.strip() == ("error: environment variable PM_DESIGN_KERNELS must be one of "
                                    "numba, numpy; got 'fortran'")
     assert not (tmp_path / "run").exists()
+
+
+def test_h4_compiled_inverse_condition_matches_the_numpy_path():
+    mech = get_mechanism("h4", **PAPER_DESIGNS["h4"])
+    rng = np.random.default_rng(3)
+    lo, hi = mech.pose_bounds(mech.default_orientation)
+    poses = lo + (hi - lo) * rng.random((20000, 4))
+    fast, reference = both_paths(lambda: mech.inverse_condition(poses, length=7.5))
+    np.testing.assert_array_equal(np.isnan(fast), np.isnan(reference))
+    assert 1000 < np.isfinite(reference).sum() < len(poses)  # reachable and unreachable poses
+    good = reference > 1e-3
+    np.testing.assert_allclose(fast[good], reference[good], rtol=1e-10)
+    np.testing.assert_allclose(fast[~good & np.isfinite(reference)], reference[~good & np.isfinite(reference)],
+                               atol=1e-12)
