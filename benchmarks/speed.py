@@ -36,6 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.evaluate import best_time
 from kinematics import MECHANISMS, get_mechanism, kernels
 from kinematics.workspace import _grid_axes, _grid_poses, _exact_axis, default_resolution, evaluate
 
@@ -50,15 +51,6 @@ DESIGNS = {
     "delta": dict(R=200.0, r=50.0, la=200.0, lb=400.0),
 }
 SWEEP_STUDY = ["+experiment=h4_design", "sample.n=16", "optimizer.max_evaluations=120"]
-
-
-def best_time(func, repeats: int = 7) -> float:
-    best = math.inf
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        func()
-        best = min(best, time.perf_counter() - t0)
-    return best
 
 
 def naive_seconds_per_node(mech, sample: int = 1500) -> float:
@@ -97,9 +89,9 @@ def evaluation_table() -> list[list[str]]:
         res = default_resolution(mech)
         ev = evaluate(mech, error_estimate=False)
         fine = evaluate(mech, resolution=4 * res, error_estimate=False)
-        fast = best_time(lambda: evaluate(mech, error_estimate=False))
+        fast = best_time(lambda: evaluate(mech, error_estimate=False), 7)
         with kernels.reference_kernels():
-            reference = best_time(lambda: evaluate(mech, error_estimate=False))
+            reference = best_time(lambda: evaluate(mech, error_estimate=False), 7)
             ref_ev = evaluate(mech, error_estimate=False)
         naive = naive_seconds_per_node(mech) * ev.n_samples
         same = abs(ev.volume / ref_ev.volume - 1) if ref_ev.volume else abs(ev.volume)
