@@ -260,10 +260,12 @@ class H4(Mechanism):
             reach = np.full(4, np.inf)
         else:
             reach = self.M * np.sin(np.radians(self.ball_joint_limit))
-        lower, upper, jac = _h4_columns(np.ascontiguousarray(poses), self.a, self.b, self.P, self.Q,
-                                        self.M, self.stroke, float(axis_lo), float(axis_hi),
-                                        inv_length, reach)
-        return lower, upper, kernels.inverse_condition_batch(jac, np.ones(4))
+        lower, upper, jac, rows = _h4_columns(np.ascontiguousarray(poses), self.a, self.b, self.P, self.Q,
+                                              self.M, self.stroke, float(axis_lo), float(axis_hi),
+                                              inv_length, reach)
+        ic = np.full(poses.shape[0], np.nan)
+        ic[rows] = kernels.inverse_condition_batch(jac, np.ones(4))
+        return lower, upper, ic
 
     def _compiled_jacobian(self, poses: np.ndarray, column_scale: np.ndarray) -> np.ndarray:
         """Eq. 33's Jacobian times ``diag(column_scale)``, compiled (see :func:`_h4_jacobians`)."""
@@ -429,16 +431,19 @@ def _h4_columns(poses, a, b, P, Q, M, stroke, axis_lo, axis_hi, inv_length, reac
 
     Same operations, in the same order, as ``_horizontal``,
     ``invariant_axis_interval``, ``within_joint_limits`` and ``_jacobian``.
-    Returns ``(lower, upper, jac)``; ``jac`` (N, 4, 4) is homogenised, NaN
-    where the pose is not conditioned and +inf in a row whose rod is
-    horizontal, the convention of :func:`kinematics.kernels.inverse_condition_batch`
-    (called separately: a compiled function that calls into another module
-    would not see that module's changes through numba's on-disk cache).
+    Returns ``(lower, upper, jac, rows)``: ``jac`` (K, 4, 4) holds the
+    homogenised Jacobians of the K poses to condition, whose indices are
+    ``rows`` (K,), with +inf in a row whose rod is horizontal, the convention of
+    :func:`kinematics.kernels.inverse_condition_batch` (called separately: a
+    compiled function that calls into another module would not see that
+    module's changes through numba's on-disk cache).
     """
     count = poses.shape[0]
     lower = np.empty(count)
     upper = np.empty(count)
-    jac = np.full((count, 4, 4), np.nan)
+    jac = np.empty((count, 4, 4))
+    rows = np.empty(count, dtype=np.int64)
+    k = 0
     dxs = np.empty(4)
     dys = np.empty(4)
     drops = np.empty(4)
@@ -472,14 +477,16 @@ def _h4_columns(poses, a, b, P, Q, M, stroke, axis_lo, axis_hi, inv_length, reac
             lz = -drops[i]
             if lz == 0.0:
                 for j in range(4):
-                    jac[p, i, j] = np.inf
+                    jac[k, i, j] = np.inf
                 continue
             ang = P[i] * c * dys[i] - P[i] * s * dxs[i]
-            jac[p, i, 0] = dxs[i] / lz
-            jac[p, i, 1] = dys[i] / lz
-            jac[p, i, 2] = lz / lz
-            jac[p, i, 3] = ang / lz * inv_length
-    return lower, upper, jac
+            jac[k, i, 0] = dxs[i] / lz
+            jac[k, i, 1] = dys[i] / lz
+            jac[k, i, 2] = lz / lz
+            jac[k, i, 3] = ang / lz * inv_length
+        rows[k] = p
+        k += 1
+    return lower, upper, jac[:k], rows[:k]
 
 
 @kernels.jit

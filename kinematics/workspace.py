@@ -179,6 +179,13 @@ def _grid_axes(mechanism: Mechanism, resolution: int, orientation: tuple[float, 
 def _grid_poses(axes: list[np.ndarray], start: int, stop: int) -> np.ndarray:
     """Rows ``start:stop`` of the C-ordered Cartesian product of ``axes``."""
     shape = tuple(len(a) for a in axes)
+    if start == 0 and stop == math.prod(shape):
+        # the whole grid (the usual single chunk): broadcast each axis into its column,
+        # ~20x faster than unravelling every row index
+        out = np.empty(shape + (len(axes),))
+        for k, axis in enumerate(axes):
+            out[..., k] = axis.reshape([-1 if j == k else 1 for j in range(len(axes))])
+        return out.reshape(-1, len(axes))
     index = np.unravel_index(np.arange(start, stop), shape)
     return np.column_stack([a[i] for a, i in zip(axes, index)])
 
