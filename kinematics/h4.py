@@ -255,14 +255,13 @@ class H4(Mechanism):
         if not kernels.compiled():
             return None
         poses = self._check_poses(poses)
-        inv_length = float(self.angular_scale(length)[3])
         if self.ball_joint_limit is None:
             reach = np.full(4, np.inf)
         else:
             reach = self.M * np.sin(np.radians(self.ball_joint_limit))
         lower, upper, jac, rows = _h4_columns(np.ascontiguousarray(poses), self.a, self.b, self.P, self.Q,
                                               self.M, self.stroke, float(axis_lo), float(axis_hi),
-                                              inv_length, reach)
+                                              self.angular_scale(length), reach)
         ic = np.full(poses.shape[0], np.nan)
         ic[rows] = kernels.inverse_condition_batch(jac, np.ones(4))
         return lower, upper, ic
@@ -425,8 +424,34 @@ class H4(Mechanism):
 
 
 
+@kernels.inline_jit
+def _leg(x, y, c, s, a_i, b_i, P_i, Q_i, M_i):
+    """Leg i at pose (x, y, theta) with ``c, s = cos, sin theta``: the horizontal components
+    (dx, dy) of ``A_i B_i`` (cm) and ``M_i^2 - dx^2 - dy^2`` (cm^2, eq. 11's radicand),
+    the same operations as ``H4._horizontal``."""
+    dx = P_i * c + x - a_i
+    dy = P_i * s + y + Q_i - b_i
+    return dx, dy, M_i**2 - dx**2 - dy**2
+
+
+@kernels.inline_jit
+def _jacobian_row(jac, k, i, dx, dy, drop, P_i, c, s, column_scale):
+    """Row i of eq. 33 times ``column_scale`` into ``jac[k]`` (``drop = -L_z`` >= 0, cm), the
+    same operations as ``H4._jacobian``; +inf when the rod is horizontal (``L_z = 0``)."""
+    lz = -drop
+    if lz == 0.0:
+        for j in range(4):
+            jac[k, i, j] = np.inf
+        return
+    ang = P_i * c * dy - P_i * s * dx
+    jac[k, i, 0] = dx / lz * column_scale[0]
+    jac[k, i, 1] = dy / lz * column_scale[1]
+    jac[k, i, 2] = lz / lz * column_scale[2]
+    jac[k, i, 3] = ang / lz * column_scale[3]
+
+
 @kernels.jit
-def _h4_columns(poses, a, b, P, Q, M, stroke, axis_lo, axis_hi, inv_length, reach):
+def _h4_columns(poses, a, b, P, Q, M, stroke, axis_lo, axis_hi, column_scale, reach):
     """Kernel of :meth:`H4.exact_axis_columns`: eq. 11's z interval and eq. 33's Jacobian per pose.
 
     Same operations, in the same order, as ``_horizontal``,
@@ -454,9 +479,7 @@ def _h4_columns(poses, a, b, P, Q, M, stroke, axis_lo, axis_hi, inv_length, reac
         reachable = True
         within = True
         for i in range(4):
-            dx = P[i] * c + x - a[i]
-            dy = P[i] * s + y + Q[i] - b[i]
-            disc = M[i] ** 2 - dx**2 - dy**2
+            dx, dy, disc = _leg(x, y, c, s, a[i], b[i], P[i], Q[i], M[i])
             if not disc >= 0.0:
                 reachable = False
                 break
@@ -474,16 +497,7 @@ def _h4_columns(poses, a, b, P, Q, M, stroke, axis_lo, axis_hi, inv_length, reac
         if not (hi - lo > 0.0 and within):
             continue
         for i in range(4):
-            lz = -drops[i]
-            if lz == 0.0:
-                for j in range(4):
-                    jac[k, i, j] = np.inf
-                continue
-            ang = P[i] * c * dys[i] - P[i] * s * dxs[i]
-            jac[k, i, 0] = dxs[i] / lz
-            jac[k, i, 1] = dys[i] / lz
-            jac[k, i, 2] = lz / lz
-            jac[k, i, 3] = ang / lz * inv_length
+            _jacobian_row(jac, k, i, dxs[i], dys[i], drops[i], P[i], c, s, column_scale)
         rows[k] = p
         k += 1
     return lower, upper, jac[:k], rows[:k]
@@ -502,21 +516,10 @@ def _h4_jacobians(poses, a, b, P, Q, M, column_scale):
         x, y, theta = poses[p, 0], poses[p, 1], poses[p, 3]
         c, s = math.cos(theta), math.sin(theta)
         for i in range(4):
-            dx = P[i] * c + x - a[i]
-            dy = P[i] * s + y + Q[i] - b[i]
-            disc = M[i] ** 2 - dx**2 - dy**2
+            dx, dy, disc = _leg(x, y, c, s, a[i], b[i], P[i], Q[i], M[i])
             if not disc >= 0.0:
                 for j in range(4):
                     jac[p, i, j] = np.nan
                 continue
-            lz = -math.sqrt(disc)
-            if lz == 0.0:
-                for j in range(4):
-                    jac[p, i, j] = np.inf
-                continue
-            ang = P[i] * c * dy - P[i] * s * dx
-            jac[p, i, 0] = dx / lz * column_scale[0]
-            jac[p, i, 1] = dy / lz * column_scale[1]
-            jac[p, i, 2] = lz / lz * column_scale[2]
-            jac[p, i, 3] = ang / lz * column_scale[3]
+            _jacobian_row(jac, p, i, dx, dy, math.sqrt(disc), P[i], c, s, column_scale)
     return jac

@@ -262,7 +262,7 @@ def _integrate_grid(mechanism, resolution, orientation, min_ic, length, fixed, k
             feasible = weight > 0
             poses[feasible, exact] = 0.5 * (lower[feasible] + upper[feasible])
             extent = np.column_stack([lower, upper])
-        if exact is not None and fused is not None:
+        if fused is not None:
             ic[~_within_orientation(mechanism, poses, orientation)] = np.nan
             inside = _dexterous(ic, min_ic)
         else:

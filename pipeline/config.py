@@ -435,7 +435,7 @@ def one_line(exc: BaseException) -> str:
     return text
 
 
-def precheck_overrides(argv: list[str]) -> Config | None:
+def precheck_overrides(argv: list[str]) -> None:
     """Compose and check a single run's config before Hydra creates anything (one line, exit 2).
 
     Catches composition errors (unknown group option, bad type), every
@@ -445,7 +445,7 @@ def precheck_overrides(argv: list[str]) -> Config | None:
     handles those, and a sweep's jobs are checked by the sweeper.
     """
     if any(arg.startswith("-") for arg in argv):
-        return None
+        return
     from hydra import compose, initialize_config_dir
     from hydra.errors import HydraException
 
@@ -455,11 +455,10 @@ def precheck_overrides(argv: list[str]) -> Config | None:
     try:
         with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3", job_name="pm-design"):
             cfg = compose(config_name="config", overrides=list(argv), return_hydra_config=True)
-        typed = validate(cfg)
+        validate(cfg)
         run_dir = Path(cfg.hydra.run.dir)
         check_writable("hydra.run.dir", run_dir)
         check_run_dir(run_dir)
-        return typed
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         sys.exit(2)

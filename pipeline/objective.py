@@ -9,9 +9,9 @@ writes that formula.
 :class:`DesignEvaluator` is a picklable description (mechanism config, grid
 options) whose :meth:`DesignEvaluator.evaluate` evaluates a population
 ``(P, n_design)`` in ``n_jobs`` chunks on the backend that
-``joblib.parallel_config`` selects: loky by default (through its reusable
-own loky executor), dask inside ``parallel_config("dask")``. Rows come back in input
-order, so results are the same whatever the number of workers.
+``joblib.parallel_config`` selects: loky by default (through this module's
+own loky executor, :func:`worker_pool`), dask inside ``parallel_config("dask")``.
+Rows come back in input order, so results are the same whatever the number of workers.
 """
 
 from __future__ import annotations
