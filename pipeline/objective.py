@@ -156,10 +156,15 @@ _WORKER_ENV = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
 _POOLS: dict[int, ProcessPoolExecutor] = {}
 
 
+#: seconds after which an idle worker exits (joblib's own default for its loky workers);
+#: without it the workers of a run killed by SIGKILL (the OOM killer) would never exit
+WORKER_IDLE_TIMEOUT = 300
+
+
 def worker_pool(n_jobs: int) -> ProcessPoolExecutor:
     """A loky executor of ``n_jobs`` worker processes (one per core, see ``_WORKER_ENV``), kept for reuse."""
     if n_jobs not in _POOLS:
-        _POOLS[n_jobs] = ProcessPoolExecutor(max_workers=n_jobs, env=_WORKER_ENV)
+        _POOLS[n_jobs] = ProcessPoolExecutor(max_workers=n_jobs, env=_WORKER_ENV, timeout=WORKER_IDLE_TIMEOUT)
     return _POOLS[n_jobs]
 
 

@@ -316,3 +316,31 @@ def test_a_job_failing_at_run_time_does_not_lose_the_sweep(monkeypatch, tmp_path
     assert sorted(best["w_d"]) == [0.0, 1.0]
     statuses = sorted(json.loads(p.read_text())["status"] for p in out.rglob("manifest.json"))
     assert statuses == ["complete", "complete", "failed"]
+
+
+def test_workers_of_a_killed_run_exit_once_idle(tmp_path):
+    """SIGKILL (the OOM killer) leaves the fitness workers orphaned: they must not live forever.
+
+    The idle timeout is shortened to 1 s here; loky then lets an orphaned worker
+    wait up to 30 s for its parent before exiting.
+    """
+    script = tmp_path / "killed.py"
+    script.write_text(
+        "import os, numpy as np\n"
+        "from pipeline import objective\n"
+        "from pipeline.config import MechanismConfig\n"
+        "objective.WORKER_IDLE_TIMEOUT = 1\n"
+        "objective.DesignEvaluator(MechanismConfig(name='rpr2'), 40, 2).evaluate(np.array([[5.0, 6.0], [4.0, 7.0]]))\n"
+        "print(os.getpid(), flush=True)\n"
+        "os.kill(os.getpid(), 9)\n")
+    # the workers inherit the pipes, so wait for the process, not for the end of its output
+    proc = subprocess.Popen([sys.executable, str(script)], cwd=ROOT, stdout=subprocess.PIPE,
+                            stderr=subprocess.DEVNULL, text=True, start_new_session=True)
+    session = int(proc.stdout.readline().split()[0])  # the killed process led its own session
+    assert proc.wait(timeout=120) == -signal.SIGKILL
+    assert _processes_in_session(session), "the workers should outlive the kill at first"
+    deadline = time.time() + 90
+    while _processes_in_session(session) and time.time() < deadline:
+        time.sleep(1.0)
+    assert _processes_in_session(session) == []
+    proc.stdout.close()
