@@ -17,7 +17,10 @@ Rows come back in input order, so results are the same whatever the number of wo
 from __future__ import annotations
 
 import atexit
-from collections.abc import Callable
+import contextlib
+import multiprocessing.resource_tracker
+import signal
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -136,8 +139,10 @@ class DesignEvaluator:
             # Parallel polls for results every 10 ms, which cost 5-10 ms of every
             # generation (a 30-design H4 batch computes in ~45 ms on 2 workers)
             try:
-                parts = list(worker_pool(self.n_jobs).map(_evaluate_chunk, [spec] * n_chunks,
-                                                          [self.resolution] * n_chunks, chunks))
+                pool = worker_pool(self.n_jobs)
+                with _sigint_held():  # workers (re)start in submit: see _sigint_held
+                    futures = [pool.submit(_evaluate_chunk, spec, self.resolution, c) for c in chunks]
+                parts = [f.result() for f in futures]
             except BrokenProcessPool:
                 _POOLS.pop(self.n_jobs, None)  # a worker died (e.g. killed): the next batch starts afresh
                 raise
@@ -166,6 +171,33 @@ def worker_pool(n_jobs: int) -> ProcessPoolExecutor:
     if n_jobs not in _POOLS:
         _POOLS[n_jobs] = ProcessPoolExecutor(max_workers=n_jobs, env=_WORKER_ENV, timeout=WORKER_IDLE_TIMEOUT)
     return _POOLS[n_jobs]
+
+
+@contextlib.contextmanager
+def _sigint_held() -> Iterator[None]:
+    """Hold SIGINT back in this thread while work is submitted to a pool.
+
+    Why: Ctrl-C sends SIGINT to the whole process group. A loky worker that
+    receives it while it is still importing prints a ``KeyboardInterrupt``
+    traceback of its own; one that receives it while computing raises inside
+    the task. Workers (and loky's manager thread, which may respawn them) are
+    started inside ``submit`` and inherit this thread's signal mask, so they
+    never see SIGINT: the main process alone handles Ctrl-C and kills them
+    (:func:`shutdown_pools`). A SIGINT that arrives meanwhile stays pending and
+    is raised here as ``KeyboardInterrupt`` when the mask is restored.
+    """
+    if not hasattr(signal, "pthread_sigmask"):  # Windows: no process-group SIGINT to hold back
+        yield
+        return
+    # Python 3.11's multiprocessing resource tracker, which loky starts with the
+    # first worker, *unblocks* SIGINT after starting (it does not restore the
+    # mask): start it before the mask is set
+    multiprocessing.resource_tracker.ensure_running()
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def shutdown_pools(kill: bool = False) -> None:
