@@ -33,6 +33,9 @@ from kinematics import kernels
 from kinematics.algebra import newton_polish, unique_rows, wrap_angle
 from kinematics.conditioning import inverse_condition_number
 
+#: poses per block of the compiled Jacobian + conditioning path (see ``Mechanism._blocked``)
+CONDITIONING_BLOCK = 8192
+
 
 class Mechanism(ABC):
     """Abstract base of a parallel mechanism with ``dof`` actuators and pose variables.
@@ -155,17 +158,64 @@ class Mechanism(ABC):
         """
         poses = self._check_poses(poses)
         scale = self.angular_scale(length)
-        compiled = self._compiled_jacobian(poses, scale) if kernels.compiled() else None
+        compiled = self._blocked(self._compiled_jacobian, poses, scale) if kernels.compiled() else None
         if compiled is not None:
-            return kernels.inverse_condition_batch(compiled, np.ones(self.dof))
+            return compiled
         jac = self.jacobian(poses)
         return inverse_condition_number(jac, scale)
+
+    def _blocked(self, jacobian_kernel, poses: np.ndarray, column_scale: np.ndarray) -> np.ndarray | None:
+        """``1/kappa`` (N,) of ``jacobian_kernel(poses, column_scale)``, :data:`CONDITIONING_BLOCK`
+        poses at a time; None when the kernel is (None: no compiled path).
+
+        Why blocks: each block's Jacobians (128 bytes a pose for 4 x 4) stay in
+        the core's cache between the kernel that writes them and the
+        conditioning that reads them.
+        """
+        out = np.empty(poses.shape[0])
+        ones = np.ones(self.dof)
+        for start in range(0, poses.shape[0], CONDITIONING_BLOCK):
+            jac = jacobian_kernel(poses[start:start + CONDITIONING_BLOCK], column_scale)
+            if jac is None:
+                return None
+            out[start:start + CONDITIONING_BLOCK] = kernels.inverse_condition_batch(jac, ones)
+        return out
 
     def _compiled_jacobian(self, poses: np.ndarray, column_scale: np.ndarray) -> np.ndarray | None:
         """Optional compiled ``jacobian(poses) * column_scale`` (N, dof, dof), same NaN/inf rows.
 
         ``None`` (the default): the numpy kernels, the reference the compiled
         one is tested against (``tests/test_kernels.py``).
+        """
+        return None
+
+    def reachable_inverse_condition(self, poses: np.ndarray, length: float | None = None) -> np.ndarray | None:
+        """Compiled fused membership test, if this mechanism has one.
+
+        Per pose of ``poses`` (N, dof), in one compiled loop: inverse
+        kinematics, actuator range, passive-joint limits and ``1/kappa`` of
+        the Jacobian homogenised by ``length`` (as :meth:`inverse_condition`).
+
+        Returns
+        -------
+        ndarray, shape (N,), or None
+            ``1/kappa`` where the pose is reachable within the actuator range
+            and the passive-joint limits, NaN elsewhere (the orientation box
+            and the dexterity limit are the caller's). None when the mechanism
+            has no compiled kernel (:meth:`_compiled_reachable_jacobian`) or the
+            numpy reference is selected: :func:`kinematics.workspace.membership`
+            then runs the numpy path, which the tests compare this one with.
+        """
+        if not kernels.compiled():
+            return None
+        return self._blocked(self._compiled_reachable_jacobian, np.ascontiguousarray(poses, dtype=float),
+                             self.angular_scale(length))
+
+    def _compiled_reachable_jacobian(self, poses: np.ndarray, column_scale: np.ndarray) -> np.ndarray | None:
+        """Optional compiled ``jacobian(poses) * column_scale`` (N, dof, dof) with NaN rows
+        where the pose is out of the actuator range or the passive-joint limits.
+
+        ``None`` (the default): no compiled path (see :meth:`reachable_inverse_condition`).
         """
         return None
 

@@ -8,7 +8,8 @@ singularity, which is what the global indices integrate.
 
 Why not ``numpy.linalg.svd``: batched LAPACK on 2x2 .. 4x4 matrices costs
 about 1-2 us per matrix, which made the SVD half of a workspace evaluation.
-For these sizes we compute ``sigma_min^2`` and ``sigma_max^2`` as the extreme
+For 2x2 the singular values have a closed form (:func:`_ratio_2x2`). For 3x3
+and 4x4 we compute ``sigma_min^2`` and ``sigma_max^2`` as the extreme
 eigenvalues of ``G = J^T J`` from its characteristic polynomial, whose
 coefficients are sums of principal minors of G (with ``det G = det(J)^2``
 computed from J, which keeps the small eigenvalue's relative accuracy at
@@ -88,6 +89,8 @@ def _ratio(jac: np.ndarray) -> np.ndarray:
     size = jac.shape[1]
     if size == 1:
         return (jac[:, 0, 0] != 0).astype(float)
+    if size == 2:
+        return _ratio_2x2(jac)
     if size > 4:
         return inverse_condition_svd(jac)
     cols = np.ascontiguousarray(np.moveaxis(jac, 0, -1))  # (n, n, N): one array per entry
@@ -110,6 +113,21 @@ def _ratio(jac: np.ndarray) -> np.ndarray:
         lam_min = _laguerre(coeffs, lower)
         ratio = np.sqrt(np.clip(lam_min, 0.0, None) / lam_max)
     ratio = np.where(lam_max > 0, ratio, 0.0)
+    return np.clip(np.nan_to_num(ratio, nan=0.0), 0.0, 1.0)
+
+
+def _ratio_2x2(jac: np.ndarray) -> np.ndarray:
+    """Closed form for 2 x 2 (N, 2, 2): ``lambda_max = (t + sqrt(t^2 - 4 det^2)) / 2`` of
+    ``G = J^T J`` (t its trace), and ``sigma_min / sigma_max = |det J| / lambda_max``
+    (``lambda_min lambda_max = det(J)^2``: no cancellation for small ``sigma_min``)."""
+    m00, m01, m10, m11 = jac[:, 0, 0], jac[:, 0, 1], jac[:, 1, 0], jac[:, 1, 1]
+    det = m00 * m11 - m01 * m10
+    trace = m00 * m00 + m10 * m10 + m01 * m01 + m11 * m11
+    disc = trace * trace - 4.0 * det * det
+    lam_max = 0.5 * (trace + np.sqrt(np.where(disc > 0.0, disc, 0.0)))
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        ratio = np.abs(det) / np.where(lam_max > 0.0, lam_max, 1.0)
+    ratio = np.where(lam_max > 0.0, ratio, 0.0)
     return np.clip(np.nan_to_num(ratio, nan=0.0), 0.0, 1.0)
 
 

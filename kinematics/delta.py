@@ -42,6 +42,7 @@ import math
 
 import numpy as np
 
+from kinematics import kernels
 from kinematics.base import DesignVariable, Mechanism, check_positive, check_range
 
 _AZIMUTH = np.radians([0.0, 120.0, 240.0])
@@ -178,6 +179,13 @@ class Delta(Mechanism):
         with np.errstate(divide="ignore", invalid="ignore"):
             return -grad / d_theta[..., None]
 
+    def _compiled_reachable_jacobian(self, poses: np.ndarray, column_scale: np.ndarray) -> np.ndarray:
+        """IK, actuator range, forearm limit and ``J`` of :meth:`_jacobian`, compiled
+        (see :func:`_delta_reachable_jacobians`)."""
+        lo, hi = math.radians(self.theta_min), math.radians(self.theta_max)
+        return _delta_reachable_jacobians(poses, self._cos, self._sin, self.R - self.r, self.la, self.lb, lo, hi,
+                                          self.lb * math.sin(math.radians(self.passive_limit)), column_scale)
+
     def _constraints(self, poses: np.ndarray, q: np.ndarray) -> np.ndarray:
         """``|forearm_i|^2 - lb^2`` (mm^2), zero at a solution for ``q``."""
         fx, fy, fz, _, _ = self._closure(poses, q)
@@ -214,3 +222,48 @@ class Delta(Mechanism):
     def _forward(self, q: np.ndarray) -> np.ndarray:
         """The three-sphere intersection (exact); :meth:`forward` keeps the elbow-out branch."""
         return self.assembly_modes(q)
+
+
+@kernels.jit
+def _delta_reachable_jacobians(poses, cos_az, sin_az, offset, la, lb, theta_lo, theta_hi, max_side, column_scale):
+    """Per pose (N, 3) of (x, y, z) (mm), leg by leg in its own frame (azimuth
+    ``cos_az``, ``sin_az``; ``offset = R - r``): the elbow-out angle of
+    :meth:`Delta._inverse`, the range ``theta_lo..theta_hi`` (rad), the forearm
+    limit ``|y_i| <= max_side`` (:meth:`Delta.within_joint_limits`) and the
+    row ``-grad F_i / (dF_i / dtheta_i)`` of :meth:`Delta._jacobian` times
+    ``column_scale``. Returns (N, 3, 3) (rad/mm); rows of NaN where the pose is
+    out (no IK, out of range or past the forearm limit)."""
+    count = poses.shape[0]
+    out = np.empty((count, 3, 3))
+    two_pi = 2.0 * math.pi
+    for p in range(count):
+        x, y, z = poses[p, 0], poses[p, 1], poses[p, 2]
+        for i in range(3):
+            x_leg = cos_az[i] * x + sin_az[i] * y
+            y_leg = -sin_az[i] * x + cos_az[i] * y
+            u = x_leg - offset
+            a = 2.0 * la * u
+            b = -2.0 * la * z
+            c = u * u + y_leg * y_leg + z * z + la * la - lb * lb
+            rho = math.hypot(a, b)
+            ratio = c / rho if rho > 0.0 else np.nan
+            if not (abs(ratio) <= 1.0 and abs(y_leg) <= max_side):
+                out[p, :, :] = np.nan
+                break
+            theta = (math.atan2(b, a) - math.acos(ratio) + math.pi) % two_pi - math.pi
+            if not (theta_lo <= theta <= theta_hi):
+                out[p, :, :] = np.nan
+                break
+            cq, sq = math.cos(theta), math.sin(theta)
+            fx = u - la * cq
+            fz = z + la * sq
+            d_theta = 2.0 * la * (u * sq + z * cq)
+            grads = (2.0 * (fx * cos_az[i] - y_leg * sin_az[i]), 2.0 * (fx * sin_az[i] + y_leg * cos_az[i]),
+                     2.0 * fz)
+            for j in range(3):
+                g = -grads[j]
+                if d_theta != 0.0:
+                    out[p, i, j] = g / d_theta * column_scale[j]
+                else:  # singular leg: +-inf (0 / 0: NaN), as numpy divides
+                    out[p, i, j] = (np.nan if g == 0.0 else math.copysign(np.inf, g)) * column_scale[j]
+    return out

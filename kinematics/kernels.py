@@ -156,16 +156,37 @@ def _charpoly4(g, coeffs):
     coeffs[3] = -e3
 
 
+@inline_jit
+def _inverse_condition_2x2(m00, m01, m10, m11):
+    """``sigma_min / sigma_max`` of a finite 2 x 2 matrix in closed form (as
+    :func:`kinematics.conditioning._ratio_2x2`): ``lambda_max`` of ``G = m^T m``
+    from the quadratic, then ``lambda_min lambda_max = det(m)^2`` gives
+    ``sigma_min / sigma_max = |det m| / lambda_max`` without cancellation."""
+    det = m00 * m11 - m01 * m10
+    trace = m00 * m00 + m10 * m10 + m01 * m01 + m11 * m11
+    disc = trace * trace - 4.0 * det * det
+    lam_max = 0.5 * (trace + math.sqrt(disc if disc > 0.0 else 0.0))
+    if not lam_max > 0.0:
+        return 0.0
+    ratio = abs(det) / lam_max
+    if ratio != ratio:
+        return 0.0
+    return min(ratio, 1.0)
+
+
 @jit
 def inverse_condition_small(m, gram, coeffs):
     """``sigma_min / sigma_max`` of one finite n x n matrix ``m`` (n = 2, 3, 4).
 
-    Same algorithm as :func:`kinematics.conditioning._ratio`: the extreme
+    Same algorithm as :func:`kinematics.conditioning._ratio`: closed form for
+    n = 2; otherwise the extreme
     eigenvalues of ``G = m^T m`` from its characteristic polynomial (sums of
     principal minors, ``det G = det(m)^2``) by Laguerre's method. ``gram``
     (n, n) and ``coeffs`` (n + 1,) are scratch arrays. Returns a value in [0, 1].
     """
     n = m.shape[0]
+    if n == 2:
+        return _inverse_condition_2x2(m[0, 0], m[0, 1], m[1, 0], m[1, 1])
     if n == 4:
         _gram4(m, gram)
     else:
@@ -223,6 +244,19 @@ def inverse_condition_batch(jac, column_scale):
     """
     count, n = jac.shape[0], jac.shape[1]
     out = np.empty(count)
+    if n == 2:  # closed form on scalars: no scratch matrix, no call
+        for p in range(count):
+            m00, m01 = jac[p, 0, 0] * column_scale[0], jac[p, 0, 1] * column_scale[1]
+            m10, m11 = jac[p, 1, 0] * column_scale[0], jac[p, 1, 1] * column_scale[1]
+            if math.isfinite(m00 + m01 + m10 + m11):
+                out[p] = _inverse_condition_2x2(m00, m01, m10, m11)
+            elif m00 != m00 or m01 != m01 or m10 != m10 or m11 != m11:
+                out[p] = np.nan
+            elif math.isinf(m00) or math.isinf(m01) or math.isinf(m10) or math.isinf(m11):
+                out[p] = 0.0
+            else:  # finite entries whose sum overflowed
+                out[p] = _inverse_condition_2x2(m00, m01, m10, m11)
+        return out
     m = np.empty((n, n))
     gram = np.empty((n, n))
     coeffs = np.empty(n + 1)

@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 
+from kinematics import kernels
 from kinematics.annuli import two_annuli_area
 from kinematics.base import DesignVariable, Mechanism, check_positive, check_range
 
@@ -128,6 +129,11 @@ class RPR2(Mechanism):
         jac[q == 0] = np.inf
         return jac
 
+    def _compiled_reachable_jacobian(self, poses: np.ndarray, column_scale: np.ndarray) -> np.ndarray:
+        """Eq. 1-2 and their Jacobian, compiled, NaN rows outside ``q_min..q_max``
+        (see :func:`_rpr2_reachable_jacobians`)."""
+        return _rpr2_reachable_jacobians(poses, self.b, self.q_min, self.q_max, column_scale)
+
     def _forward(self, q: np.ndarray) -> np.ndarray:
         """Closed form eq. 3-4, both branches ``y = +-sqrt(q_1^2 - x^2)``."""
         x = (q[0] ** 2 + self.b**2 - q[1] ** 2) / (2.0 * self.b)
@@ -138,3 +144,25 @@ class RPR2(Mechanism):
         if y == 0:
             return np.array([[x, 0.0]])
         return np.array([[x, y], [x, -y]])
+
+
+@kernels.jit
+def _rpr2_reachable_jacobians(poses, b, q_min, q_max, column_scale):
+    """Per pose (N, 2) of (x, y) (mm): leg lengths of eq. 1-2, the range test
+    ``q_min <= q_i <= q_max`` and the Jacobian rows ``(P - O_i)^T / q_i``
+    (as :meth:`RPR2._jacobian`) times ``column_scale``. Returns (N, 2, 2); rows
+    of NaN where a leg is out of range (``q_min > 0``, so no division by zero)."""
+    count = poses.shape[0]
+    out = np.empty((count, 2, 2))
+    for p in range(count):
+        x, y = poses[p, 0], poses[p, 1]
+        q1 = math.sqrt(x * x + y * y)
+        q2 = math.sqrt((b - x) * (b - x) + y * y)
+        if not (q_min <= q1 <= q_max and q_min <= q2 <= q_max):
+            out[p, :, :] = np.nan
+            continue
+        out[p, 0, 0] = x / q1 * column_scale[0]
+        out[p, 0, 1] = y / q1 * column_scale[1]
+        out[p, 1, 0] = (x - b) / q2 * column_scale[0]
+        out[p, 1, 1] = y / q2 * column_scale[1]
+    return out

@@ -38,6 +38,7 @@ import math
 
 import numpy as np
 
+from kinematics import kernels
 from kinematics.algebra import (
     real_tan_half_angles,
     sample_angles,
@@ -208,6 +209,12 @@ class RPR3(Mechanism):
         jac[rho == 0] = np.inf  # leg of zero length: direction undefined
         return jac
 
+    def _compiled_reachable_jacobian(self, poses: np.ndarray, column_scale: np.ndarray) -> np.ndarray:
+        """Eq. 7-9 and the Jacobian of :meth:`_jacobian`, compiled, NaN rows outside
+        ``rho_min..rho_max`` (see :func:`_rpr3_reachable_jacobians`)."""
+        return _rpr3_reachable_jacobians(poses, np.ascontiguousarray(self.base), np.ascontiguousarray(self.platform),
+                                         self.rho_min, self.rho_max, column_scale)
+
     # --------------------------------------------------- forward kinematics
     def _linear_position(self, phi: np.ndarray, q: np.ndarray):
         """(x, y) = N / D from legs 2 - 1 and 3 - 1 (linear in x, y at given phi)."""
@@ -317,3 +324,30 @@ class RPR3(Mechanism):
         out = decode(pop[np.argmin(err)][None, :])
         out[:, 2] = wrap_angle(out[:, 2])
         return out
+
+
+@kernels.jit
+def _rpr3_reachable_jacobians(poses, base, platform, rho_min, rho_max, column_scale):
+    """Per pose (N, 3) of (x, y, phi) (mm, rad): the legs ``L_i = Rot(phi) B'_i + (x, y) - A_i``,
+    the range test ``rho_min <= |L_i| <= rho_max`` (eq. 7-9) and the rows
+    ``[L_x, L_y, (Rot(phi) B'_i x L_i)_z] / rho_i`` (as :meth:`RPR3._jacobian`) times
+    ``column_scale``. Returns (N, 3, 3); rows of NaN where a leg is out of range
+    (``rho_min > 0``, so no division by zero)."""
+    count = poses.shape[0]
+    out = np.empty((count, 3, 3))
+    for p in range(count):
+        x, y, phi = poses[p, 0], poses[p, 1], poses[p, 2]
+        c, s = math.cos(phi), math.sin(phi)
+        for i in range(3):
+            arm_x = c * platform[i, 0] - s * platform[i, 1]
+            arm_y = s * platform[i, 0] + c * platform[i, 1]
+            leg_x = arm_x + x - base[i, 0]
+            leg_y = arm_y + y - base[i, 1]
+            rho = math.sqrt(leg_x * leg_x + leg_y * leg_y)
+            if not (rho_min <= rho <= rho_max):
+                out[p, :, :] = np.nan
+                break
+            out[p, i, 0] = leg_x / rho * column_scale[0]
+            out[p, i, 1] = leg_y / rho * column_scale[1]
+            out[p, i, 2] = (arm_x * leg_y - arm_y * leg_x) / rho * column_scale[2]
+    return out

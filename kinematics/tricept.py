@@ -46,6 +46,7 @@ import math
 
 import numpy as np
 
+from kinematics import kernels
 from kinematics.algebra import (
     matrix_polynomial_eigenvalues,
     near_real,
@@ -301,6 +302,18 @@ class Tricept(Mechanism):
         psi_col = moment[..., 0] * np.cos(th) - moment[..., 2] * np.sin(th)
         return np.stack([unit[..., 2], psi_col, moment[..., 1]], axis=-1)
 
+    def _compiled_reachable_jacobian(self, poses: np.ndarray, column_scale: np.ndarray) -> np.ndarray:
+        """Eq. 1-5, the joint cone and tilt limits of :meth:`within_joint_limits` and eq. 31-36's
+        ``J``, compiled (see :func:`_tricept_reachable_jacobians`)."""
+        cone = self.cone_limit
+        tilt = math.radians(self.tilt_limit) if self.tilt_limit is not None else np.inf
+        return _tricept_reachable_jacobians(
+            poses, np.ascontiguousarray(self.p), np.ascontiguousarray(self.base),
+            np.ascontiguousarray(self._home_axes), self.q_min, self.q_max,
+            cone if self.cone_joints in ("both", "base") else np.inf,
+            cone if self.cone_joints in ("both", "platform") else np.inf,
+            self.cone_reference == "home", tilt, column_scale)
+
     # --------------------------------------------------- forward kinematics
     def _eliminants(self, psi: np.ndarray, theta: np.ndarray, q: np.ndarray, scale: float):
         """``G_j = Res_c(E_1, E_1 - E_j)`` for j = 2, 3 on a (psi, theta) grid.
@@ -359,3 +372,64 @@ class Tricept(Mechanism):
         if not starts:
             return np.empty((0, 3))
         return self._polish(np.array(starts), q, q**2)
+
+
+@kernels.jit
+def _tricept_reachable_jacobians(poses, platform, base, home_axes, q_min, q_max, base_cone, platform_cone,
+                                 home_reference, tilt_limit, column_scale):
+    """Per pose (N, 3) of (c, psi, theta) (mm, rad): ``R = R_y(theta) R_x(psi)`` (eq. 1),
+    legs ``R p_i + c k - b_i`` and their lengths (eq. 1-5) within ``q_min..q_max``,
+    the joint cone angles (rad) within ``base_cone`` / ``platform_cone`` (inf: not
+    limited) against the normals or, with ``home_reference``, the home leg axes
+    (:meth:`Tricept.cone_angles`), the central joint's tilt within ``tilt_limit``
+    (rad, inf: none), and the rows ``[n_z, (r x n) . (cos theta, 0, -sin theta),
+    (r x n)_y]`` of :meth:`Tricept._jacobian` times ``column_scale``. Returns
+    (N, 3, 3); rows of NaN where the pose is out. Same operation order as the
+    numpy methods."""
+    count = poses.shape[0]
+    out = np.empty((count, 3, 3))
+    rot = np.empty((3, 3))
+    arm = np.empty(3)
+    for p in range(count):
+        c, psi, theta = poses[p, 0], poses[p, 1], poses[p, 2]
+        cp, sp, ct, st = math.cos(psi), math.sin(psi), math.cos(theta), math.sin(theta)
+        rot[0, 0], rot[0, 1], rot[0, 2] = ct, sp * st, cp * st
+        rot[1, 0], rot[1, 1], rot[1, 2] = 0.0, cp, -sp
+        rot[2, 0], rot[2, 1], rot[2, 2] = -st, ct * sp, ct * cp
+        tilt = math.acos(min(max(cp * ct, -1.0), 1.0))
+        ok = tilt <= tilt_limit
+        for i in range(3):
+            if not ok:
+                break
+            for k in range(3):
+                arm[k] = rot[k, 0] * platform[i, 0] + rot[k, 1] * platform[i, 1] + rot[k, 2] * platform[i, 2]
+            lx, ly, lz = arm[0] - base[i, 0], arm[1] - base[i, 1], arm[2] - base[i, 2] + c
+            q = math.sqrt(lx * lx + ly * ly + lz * lz)
+            if not (q_min <= q <= q_max):
+                ok = False
+                break
+            nx, ny, nz = lx / q, ly / q, lz / q
+            if home_reference:
+                hx, hy, hz = home_axes[i, 0], home_axes[i, 1], home_axes[i, 2]
+                base_cos = nx * hx + ny * hy + nz * hz
+                mx = rot[0, 0] * hx + rot[0, 1] * hy + rot[0, 2] * hz
+                my = rot[1, 0] * hx + rot[1, 1] * hy + rot[1, 2] * hz
+                mz = rot[2, 0] * hx + rot[2, 1] * hy + rot[2, 2] * hz
+                platform_cos = nx * mx + ny * my + nz * mz
+            else:
+                base_cos = nz
+                platform_cos = nx * rot[0, 2] + ny * rot[1, 2] + nz * rot[2, 2]
+            if not (math.acos(min(max(base_cos, -1.0), 1.0)) <= base_cone
+                    and math.acos(min(max(platform_cos, -1.0), 1.0)) <= platform_cone):
+                ok = False
+                break
+            # moment r x n of eq. 31
+            mom_x = arm[1] * nz - arm[2] * ny
+            mom_y = arm[2] * nx - arm[0] * nz
+            mom_z = arm[0] * ny - arm[1] * nx
+            out[p, i, 0] = nz * column_scale[0]
+            out[p, i, 1] = (mom_x * ct - mom_z * st) * column_scale[1]
+            out[p, i, 2] = mom_y * column_scale[2]
+        if not ok:
+            out[p, :, :] = np.nan
+    return out

@@ -113,6 +113,11 @@ def membership(mechanism: Mechanism, poses: np.ndarray, orientation: tuple[float
         ``1/kappa`` of the homogenised Jacobian where the pose is reachable
         within the actuator and joint limits, NaN elsewhere.
     """
+    if reachable is None:
+        fused = mechanism.reachable_inverse_condition(poses, length)
+        if fused is not None:
+            fused[~_within_orientation(mechanism, poses, orientation)] = np.nan
+            return _dexterous(fused, min_inverse_condition), fused
     n = poses.shape[0]
     ic = np.full(n, np.nan)
     if reachable is None:
@@ -179,15 +184,26 @@ def _grid_axes(mechanism: Mechanism, resolution: int, orientation: tuple[float, 
 def _grid_poses(axes: list[np.ndarray], start: int, stop: int) -> np.ndarray:
     """Rows ``start:stop`` of the C-ordered Cartesian product of ``axes``."""
     shape = tuple(len(a) for a in axes)
-    if start == 0 and stop == math.prod(shape):
-        # the whole grid (the usual single chunk): broadcast each axis into its column,
-        # ~20x faster than unravelling every row index
-        out = np.empty(shape + (len(axes),))
-        for k, axis in enumerate(axes):
+    inner = math.prod(shape[1:])
+    if start % inner == 0 and (stop % inner == 0 or stop == math.prod(shape)):
+        # whole rows of the leading axis (the chunks of _chunk_bounds): broadcast each
+        # axis into its column, ~20x faster than unravelling every row index
+        block = [axes[0][start // inner:-(-stop // inner)], *axes[1:]]
+        out = np.empty(tuple(len(a) for a in block) + (len(axes),))
+        for k, axis in enumerate(block):
             out[..., k] = axis.reshape([-1 if j == k else 1 for j in range(len(axes))])
         return out.reshape(-1, len(axes))
     index = np.unravel_index(np.arange(start, stop), shape)
     return np.column_stack([a[i] for a, i in zip(axes, index)])
+
+
+def _chunk_bounds(axes: list[np.ndarray]) -> list[tuple[int, int]]:
+    """Row ranges of at most ~:data:`CHUNK` grid nodes, whole rows of the leading axis when
+    a row fits (so that :func:`_grid_poses` can broadcast)."""
+    total = math.prod(len(a) for a in axes)
+    inner = math.prod(len(a) for a in axes[1:])
+    step = max(CHUNK // inner, 1) * inner if inner <= CHUNK else CHUNK
+    return [(start, min(start + step, total)) for start in range(0, total, step)]
 
 
 def _exact_axis(mechanism: Mechanism, fixed: dict[str, float]) -> int | None:
@@ -243,8 +259,8 @@ def _integrate_grid(mechanism, resolution, orientation, min_ic, length, fixed, k
     n_inside = 0
     ic_min, ic_max = math.inf, -math.inf
     kept = []
-    for start in range(0, total, CHUNK):
-        poses = _grid_poses(axes, start, min(start + CHUNK, total))
+    for start, stop in _chunk_bounds(axes):
+        poses = _grid_poses(axes, start, stop)
         fused = None
         if exact is None:
             weight = np.ones(poses.shape[0])

@@ -132,3 +132,29 @@ def test_h4_compiled_inverse_condition_matches_the_numpy_path():
     np.testing.assert_allclose(fast[good], reference[good], rtol=1e-10)
     np.testing.assert_allclose(fast[~good & np.isfinite(reference)], reference[~good & np.isfinite(reference)],
                                atol=1e-12)
+
+
+FUSED = [("rpr2", {}), ("rpr3", {}), ("delta", {}), ("delta", {"passive_limit": 20.0}), ("tricept", {}),
+         ("tricept", {"cone_reference": "home", "tilt_limit": 25.0}), ("tricept", {"cone_joints": "platform"}),
+         ("tricept", {"cone_joints": "none", "offset_side": -1})]
+
+
+@pytest.mark.parametrize("name, extra", FUSED, ids=[f"{n}-{'-'.join(e) or 'default'}" for n, e in FUSED])
+def test_fused_membership_matches_the_numpy_path(name, extra):
+    """Per pose: the compiled IK + limits + 1/kappa of ``reachable_inverse_condition``
+    against the numpy membership test (same poses in and out, same 1/kappa)."""
+    from kinematics.workspace import membership
+
+    mech = get_mechanism(name, **{**PAPER_DESIGNS[name], **extra})
+    orientation = mech.default_orientation
+    lo, hi = mech.pose_bounds(orientation)
+    poses = lo + (hi - lo) * np.random.default_rng(5).random((30000, mech.dof))
+    fused = mech.reachable_inverse_condition(poses)
+    assert fused is not None, "this mechanism should have a compiled kernel"
+    (inside, ic), (ref_inside, ref_ic) = both_paths(lambda: membership(mech, poses, orientation, 0.0))
+    with kernels.reference_kernels():
+        assert mech.reachable_inverse_condition(poses) is None
+    np.testing.assert_array_equal(inside, ref_inside)
+    np.testing.assert_array_equal(np.isnan(ic), np.isnan(ref_ic))
+    assert 300 < ref_inside.sum() < len(poses) - 300  # poses both in and out
+    np.testing.assert_allclose(ic[ref_inside], ref_ic[ref_inside], rtol=1e-12, atol=1e-15)

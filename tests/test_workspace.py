@@ -214,3 +214,24 @@ def test_evaluation_is_a_frozen_dataclass():
     assert isinstance(ev, Evaluation)
     with pytest.raises(AttributeError):
         ev.volume = 1.0
+
+
+@pytest.mark.parametrize("chunk", [7, 1000, 50_000])
+def test_chunked_grid_equals_one_chunk(monkeypatch, chunk):
+    """Chunks (whole leading-axis rows, or index ranges when a row is too long) cover the
+    grid in order, and the integral does not depend on the chunk size."""
+    import kinematics.workspace as ws
+
+    mech = get_mechanism("rpr3", **PAPER_DESIGNS["rpr3"])
+    axes, _ = ws._grid_axes(mech, 20, mech.default_orientation, {})
+    whole = ws._grid_poses(axes, 0, 20**3)
+    reference = evaluate(mech, resolution=20, error_estimate=False)
+    monkeypatch.setattr(ws, "CHUNK", chunk)
+    bounds = ws._chunk_bounds(axes)
+    assert bounds[0][0] == 0 and bounds[-1][1] == 20**3
+    assert all(a[1] == b[0] for a, b in zip(bounds, bounds[1:]))
+    np.testing.assert_array_equal(np.vstack([ws._grid_poses(axes, *b) for b in bounds]), whole)
+    chunked = evaluate(mech, resolution=20, error_estimate=False)
+    assert chunked.n_inside == reference.n_inside
+    assert chunked.volume == pytest.approx(reference.volume, rel=1e-12)
+    assert chunked.gdi == pytest.approx(reference.gdi, rel=1e-12)
