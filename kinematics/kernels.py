@@ -71,7 +71,7 @@ def reference_kernels() -> Iterator[None]:
 
 
 # ------------------------------------------------------------ conditioning
-@jit
+@inline_jit
 def _det3(m, i0, i1, i2, j0, j1, j2):
     """Determinant of rows (i0, i1, i2), columns (j0, j1, j2) of ``m`` (Laplace, row i0)."""
     return (m[i0, j0] * (m[i1, j1] * m[i2, j2] - m[i1, j2] * m[i2, j1])
@@ -79,7 +79,7 @@ def _det3(m, i0, i1, i2, j0, j1, j2):
             + m[i0, j2] * (m[i1, j0] * m[i2, j1] - m[i1, j1] * m[i2, j0]))
 
 
-@jit
+@inline_jit
 def _laguerre_step(c, degree, x):
     """One Laguerre step on ``c[0] x^n + ... + c[n]`` from ``x`` (0 at a root or a flat point)."""
     p = c[0]
@@ -123,7 +123,7 @@ def _extreme_roots(c, degree, x_max, x_min):
     return x_max, x_min
 
 
-@jit
+@inline_jit
 def _gram4(m, gram):
     """``gram = m^T m`` for 4 x 4 ``m`` (constant trip counts: the compiler unrolls them)."""
     for i in range(4):
@@ -133,7 +133,7 @@ def _gram4(m, gram):
             gram[j, i] = s
 
 
-@jit
+@inline_jit
 def _charpoly4(g, coeffs):
     """``coeffs[2] = e2``, ``coeffs[3] = -e3`` of a symmetric 4 x 4 ``g`` (principal minors).
 
@@ -174,50 +174,10 @@ def _inverse_condition_2x2(m00, m01, m10, m11):
     return min(ratio, 1.0)
 
 
-@jit
-def inverse_condition_small(m, gram, coeffs):
-    """``sigma_min / sigma_max`` of one finite n x n matrix ``m`` (n = 2, 3, 4).
-
-    Same algorithm as :func:`kinematics.conditioning._ratio`: closed form for
-    n = 2; otherwise the extreme
-    eigenvalues of ``G = m^T m`` from its characteristic polynomial (sums of
-    principal minors, ``det G = det(m)^2``) by Laguerre's method. ``gram``
-    (n, n) and ``coeffs`` (n + 1,) are scratch arrays. Returns a value in [0, 1].
-    """
-    n = m.shape[0]
-    if n == 2:
-        return _inverse_condition_2x2(m[0, 0], m[0, 1], m[1, 0], m[1, 1])
-    if n == 4:
-        _gram4(m, gram)
-    else:
-        for i in range(n):
-            for j in range(i, n):
-                s = 0.0
-                for k in range(n):
-                    s += m[k, i] * m[k, j]
-                gram[i, j] = s
-                gram[j, i] = s
-    coeffs[0] = 1.0
-    trace = 0.0
-    for i in range(n):
-        trace += gram[i, i]
-    coeffs[1] = -trace
-    if n == 2:
-        det = m[0, 0] * m[1, 1] - m[0, 1] * m[1, 0]
-        coeffs[2] = det * det
-    elif n == 3:
-        e2 = 0.0
-        for i in range(3):
-            for j in range(i + 1, 3):
-                e2 += gram[i, i] * gram[j, j] - gram[i, j] * gram[j, i]
-        coeffs[2] = e2
-        det = _det3(m, 0, 1, 2, 0, 1, 2)
-        coeffs[3] = -det * det
-    else:
-        _charpoly4(gram, coeffs)
-        det = (m[0, 0] * _det3(m, 1, 2, 3, 1, 2, 3) - m[0, 1] * _det3(m, 1, 2, 3, 0, 2, 3)
-               + m[0, 2] * _det3(m, 1, 2, 3, 0, 1, 3) - m[0, 3] * _det3(m, 1, 2, 3, 0, 1, 2))
-        coeffs[4] = det * det
+@inline_jit
+def _extreme_ratio(coeffs, n, trace):
+    """``sqrt(lambda_min / lambda_max)`` in [0, 1] of the characteristic polynomial ``coeffs``
+    (degree n, trace ``-coeffs[1]``) of ``G = m^T m``, by Laguerre from both sides."""
     # start each iteration on its side of the root, as close as cheap bounds allow:
     # sum(lambda^2) = e1^2 - 2 e2 >= lambda_max^2, and e_n / e_(n-1) <= lambda_min
     # (e_(n-1) >= the product of the n - 1 largest eigenvalues)
@@ -234,55 +194,128 @@ def inverse_condition_small(m, gram, coeffs):
     return min(max(ratio, 0.0), 1.0)
 
 
-@jit
-def inverse_condition_batch(jac, column_scale):
-    """``1/kappa`` of each matrix of ``jac`` (N, n, n) times ``diag(column_scale)``.
+@inline_jit
+def _inverse_condition_3x3(m, gram, coeffs):
+    """``sigma_min / sigma_max`` of one finite 3 x 3 ``m`` (as :func:`kinematics.conditioning._ratio`):
+    the extreme eigenvalues of ``G = m^T m`` from its characteristic polynomial (sums of
+    principal minors, ``det G = det(m)^2``) by Laguerre's method. ``gram`` (3, 3) and
+    ``coeffs`` (4,) are scratch arrays."""
+    for i in range(3):
+        for j in range(i, 3):
+            s = 0.0
+            for k in range(3):
+                s += m[k, i] * m[k, j]
+            gram[i, j] = s
+            gram[j, i] = s
+    coeffs[0] = 1.0
+    trace = 0.0
+    for i in range(3):
+        trace += gram[i, i]
+    coeffs[1] = -trace
+    e2 = 0.0
+    for i in range(3):
+        for j in range(i + 1, 3):
+            e2 += gram[i, i] * gram[j, j] - gram[i, j] * gram[j, i]
+    coeffs[2] = e2
+    det = _det3(m, 0, 1, 2, 0, 1, 2)
+    coeffs[3] = -det * det
+    return _extreme_ratio(coeffs, 3, trace)
 
-    NaN where any entry is NaN (unreachable pose), 0 where an entry is
-    infinite (singular actuator Jacobian), as
-    :func:`kinematics.conditioning.inverse_condition_number`.
-    """
-    count, n = jac.shape[0], jac.shape[1]
+
+@inline_jit
+def _inverse_condition_4x4(m, gram, coeffs):
+    """The same for one finite 4 x 4 ``m``; ``gram`` (4, 4), ``coeffs`` (5,)."""
+    _gram4(m, gram)
+    coeffs[0] = 1.0
+    trace = 0.0
+    for i in range(4):
+        trace += gram[i, i]
+    coeffs[1] = -trace
+    _charpoly4(gram, coeffs)
+    det = (m[0, 0] * _det3(m, 1, 2, 3, 1, 2, 3) - m[0, 1] * _det3(m, 1, 2, 3, 0, 2, 3)
+           + m[0, 2] * _det3(m, 1, 2, 3, 0, 1, 3) - m[0, 3] * _det3(m, 1, 2, 3, 0, 1, 2))
+    coeffs[4] = det * det
+    return _extreme_ratio(coeffs, 4, trace)
+
+
+@inline_jit
+def _scaled_copy(jac, p, column_scale, m):
+    """Copy matrix ``p`` of ``jac`` times ``diag(column_scale)`` into ``m``; 0 when every entry
+    is finite (or finite with an overflowing sum), 1 if any is NaN, 2 if any is infinite."""
+    n = m.shape[0]
+    total = 0.0
+    for i in range(n):
+        for j in range(n):
+            v = jac[p, i, j] * column_scale[j]
+            total += v
+            m[i, j] = v
+    if math.isfinite(total):  # every entry finite: the common case, one test
+        return 0
+    has_inf = False
+    for i in range(n):
+        for j in range(n):
+            v = m[i, j]
+            if v != v:
+                return 1
+            if math.isinf(v):
+                has_inf = True
+    return 2 if has_inf else 0
+
+
+@jit
+def _batch_2x2(jac, column_scale):
+    """2 x 2 batch: closed form on scalars (no scratch matrix, no call)."""
+    count = jac.shape[0]
     out = np.empty(count)
-    if n == 2:  # closed form on scalars: no scratch matrix, no call
-        for p in range(count):
-            m00, m01 = jac[p, 0, 0] * column_scale[0], jac[p, 0, 1] * column_scale[1]
-            m10, m11 = jac[p, 1, 0] * column_scale[0], jac[p, 1, 1] * column_scale[1]
-            if math.isfinite(m00 + m01 + m10 + m11):
-                out[p] = _inverse_condition_2x2(m00, m01, m10, m11)
-            elif m00 != m00 or m01 != m01 or m10 != m10 or m11 != m11:
-                out[p] = np.nan
-            elif math.isinf(m00) or math.isinf(m01) or math.isinf(m10) or math.isinf(m11):
-                out[p] = 0.0
-            else:  # finite entries whose sum overflowed
-                out[p] = _inverse_condition_2x2(m00, m01, m10, m11)
-        return out
-    m = np.empty((n, n))
-    gram = np.empty((n, n))
-    coeffs = np.empty(n + 1)
     for p in range(count):
-        total = 0.0
-        for i in range(n):
-            for j in range(n):
-                v = jac[p, i, j] * column_scale[j]
-                total += v
-                m[i, j] = v
-        if math.isfinite(total):  # every entry finite: the common case, one test
-            out[p] = inverse_condition_small(m, gram, coeffs)
-            continue
-        has_nan = False
-        has_inf = False
-        for i in range(n):
-            for j in range(n):
-                v = m[i, j]
-                if v != v:
-                    has_nan = True
-                elif math.isinf(v):
-                    has_inf = True
-        if has_nan:
+        m00, m01 = jac[p, 0, 0] * column_scale[0], jac[p, 0, 1] * column_scale[1]
+        m10, m11 = jac[p, 1, 0] * column_scale[0], jac[p, 1, 1] * column_scale[1]
+        if math.isfinite(m00 + m01 + m10 + m11):
+            out[p] = _inverse_condition_2x2(m00, m01, m10, m11)
+        elif m00 != m00 or m01 != m01 or m10 != m10 or m11 != m11:
             out[p] = np.nan
-        elif has_inf:
+        elif math.isinf(m00) or math.isinf(m01) or math.isinf(m10) or math.isinf(m11):
             out[p] = 0.0
         else:  # finite entries whose sum overflowed
-            out[p] = inverse_condition_small(m, gram, coeffs)
+            out[p] = _inverse_condition_2x2(m00, m01, m10, m11)
     return out
+
+
+@jit
+def _batch_3x3(jac, column_scale):
+    """3 x 3 batch (see :func:`inverse_condition_batch`)."""
+    out = np.empty(jac.shape[0])
+    m, gram, coeffs = np.empty((3, 3)), np.empty((3, 3)), np.empty(4)
+    for p in range(jac.shape[0]):
+        kind = _scaled_copy(jac, p, column_scale, m)
+        out[p] = _inverse_condition_3x3(m, gram, coeffs) if kind == 0 else (np.nan if kind == 1 else 0.0)
+    return out
+
+
+@jit
+def _batch_4x4(jac, column_scale):
+    """4 x 4 batch (see :func:`inverse_condition_batch`)."""
+    out = np.empty(jac.shape[0])
+    m, gram, coeffs = np.empty((4, 4)), np.empty((4, 4)), np.empty(5)
+    for p in range(jac.shape[0]):
+        kind = _scaled_copy(jac, p, column_scale, m)
+        out[p] = _inverse_condition_4x4(m, gram, coeffs) if kind == 0 else (np.nan if kind == 1 else 0.0)
+    return out
+
+
+#: the compiled batch of each matrix size; one function per size, so that a mechanism
+#: compiles only the code of its own size on a new machine (the first run's compile time)
+_BATCHES = {2: _batch_2x2, 3: _batch_3x3, 4: _batch_4x4}
+
+
+def inverse_condition_batch(jac: np.ndarray, column_scale: np.ndarray) -> np.ndarray:
+    """``1/kappa`` of each matrix of ``jac`` (N, n, n), n = 2, 3 or 4, times ``diag(column_scale)``.
+
+    Same algorithm as :func:`kinematics.conditioning._ratio`: closed form for
+    n = 2; otherwise the extreme eigenvalues of ``G = m^T m`` from its
+    characteristic polynomial (sums of principal minors, ``det G = det(m)^2``)
+    by Laguerre's method. NaN where any entry is NaN (unreachable pose), 0
+    where an entry is infinite (singular actuator Jacobian), as
+    :func:`kinematics.conditioning.inverse_condition_number`. Values in [0, 1].
+    """
+    return _BATCHES[jac.shape[1]](jac, column_scale)
