@@ -79,7 +79,7 @@ def _det3(m, i0, i1, i2, j0, j1, j2):
             + m[i0, j2] * (m[i1, j0] * m[i2, j1] - m[i1, j1] * m[i2, j0]))
 
 
-@inline_jit
+@jit
 def _laguerre_step(c, degree, x):
     """One Laguerre step on ``c[0] x^n + ... + c[n]`` from ``x`` (0 at a root or a flat point)."""
     p = c[0]
@@ -123,7 +123,7 @@ def _extreme_roots(c, degree, x_max, x_min):
     return x_max, x_min
 
 
-@inline_jit
+@jit
 def _gram4(m, gram):
     """``gram = m^T m`` for 4 x 4 ``m`` (constant trip counts: the compiler unrolls them)."""
     for i in range(4):
@@ -133,7 +133,7 @@ def _gram4(m, gram):
             gram[j, i] = s
 
 
-@inline_jit
+@jit
 def _charpoly4(g, coeffs):
     """``coeffs[2] = e2``, ``coeffs[3] = -e3`` of a symmetric 4 x 4 ``g`` (principal minors).
 

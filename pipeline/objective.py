@@ -130,11 +130,19 @@ class DesignEvaluator:
         n_chunks = min(self.n_jobs, designs.shape[0])
         if n_chunks == 1:
             return _evaluate_chunk(spec, self.resolution, designs)
+        backend, _ = get_active_backend()
+        loky = isinstance(backend, LokyBackend)
+        if loky and spec.name not in _COMPILED:
+            # start the workers now: their start-up (a new interpreter and the package's
+            # imports, ~1.5 s) then overlaps the compilation below instead of following it
+            pool = worker_pool(self.n_jobs)
+            with _sigint_held():
+                for _ in range(self.n_jobs):
+                    pool.submit(_start_worker)
         _compile_kernels(spec, designs)
         # contiguous equal chunks: no straggler beyond one design
         chunks = np.array_split(designs, n_chunks)
-        backend, _ = get_active_backend()
-        if isinstance(backend, LokyBackend):
+        if loky:
             # loky (the default) straight through a loky executor: joblib's
             # Parallel polls for results every 10 ms, which cost 5-10 ms of every
             # generation (a 30-design H4 batch computes in ~45 ms on 2 workers)
@@ -232,6 +240,10 @@ def _compile_kernels(spec: MechanismSpec, designs: np.ndarray) -> None:
         evaluate(mech, **dict(spec.options, resolution=2, error_estimate=False))
         _COMPILED.add(spec.name)
         return
+
+
+def _start_worker() -> None:
+    """Nothing: unpickling it imports this module, and so the kinematics, in a new worker."""
 
 
 def _evaluate_chunk(spec: MechanismSpec, resolution: int | None, designs: np.ndarray) -> np.ndarray:
