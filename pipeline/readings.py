@@ -41,16 +41,12 @@ from pipeline.optimizers import REFERENCE_EVALUATIONS
 from pipeline.optimizers.base import Problem
 from pipeline.optimizers.cmaes import CMAES, CMAESConfig
 from pipeline.optimizers.polish import polish
+from pipeline.papers import load_paper
 from pipeline.sample import sample_designs
 
-#: seed 000 Tables 1-3: V (cm³ as printed), GDI, and the design (cm)
-H4_PAPER = {
-    "Table 1 (max V)": dict(V=12582.0, gdi=0.042, d=13.52484, h=13.88781, Qz=35.18892),
-    "Table 2 (max GDI)": dict(V=4.1887, gdi=0.0705, d=1.00008, h=1.09692, Qz=35.48742),
-    "Table 3 (w_d = 0.25)": dict(V=11983.0, gdi=0.0521, d=12.14243, h=10.38564, Qz=37.25841),
-    "Table 3 (w_d = 0.5)": dict(V=11304.0, gdi=0.0547, d=12.60003, h=9.06147, Qz=39.61105),
-    "Table 3 (w_d = 0.75)": dict(V=11008.0, gdi=0.059, d=10.36257, h=5.56941, Qz=40.69626),
-}
+#: seed 000 Tables 1-3: V (cm³ as printed), GDI, and the design (cm), from pipeline/papers/seed000_h4.yaml
+H4_PAPER = {row["table"]: {k: row[k] for k in ("V", "gdi", "d", "h", "Qz")}
+            for row in load_paper("seed000_h4")["rows"]}
 #: Table 2's V = 4.1887 is 4π/3 to five digits: a floor of the paper's volume routine, not a volume
 H4_DEGENERATE_V = ("Table 2 (max GDI)",)
 #: seed 001 Table 2: V (mm·rad²) and the LCI range; the design with a and b swapped back into their bounds

@@ -38,6 +38,7 @@ from pipeline.optimizers.nsga2 import nsga2
 from pipeline.plot import plot_convergence, plot_workspace
 from pipeline.readings import H4_PAPER
 from pipeline.run import run_study
+from pipeline.tables import rel, table
 
 log = logging.getLogger(__name__)
 CONF = CONFIG_DIR
@@ -76,23 +77,6 @@ def _run_counted(cfg, run_dir: Path) -> tuple[dict[str, Path], int]:
     finally:
         logger.removeHandler(counter)
         logger.setLevel(level)
-
-
-def rel(ours: float, paper: float) -> str:
-    """Relative difference in percent, as text."""
-    if paper == 0 or not math.isfinite(ours):
-        return "n/a"
-    return f"{100 * (ours - paper) / abs(paper):+.1f} %"
-
-
-def table(header: list[str], rows: list[list]) -> str:
-    def fmt(v):
-        if isinstance(v, float):
-            return f"{v:.6g}"
-        return str(v)
-    lines = ["| " + " | ".join(header) + " |", "| " + " | ".join("---" for _ in header) + " |"]
-    lines += ["| " + " | ".join(fmt(v) for v in row) + " |" for row in rows]
-    return "\n".join(lines)
 
 
 def bound_positions(row: pd.Series, mechanism: str) -> str:
@@ -280,9 +264,9 @@ def h4_tables(r: Reproduction) -> dict[str, pd.Series]:
                             ("Qz", "param_Qz")):
             vals = frame[column].to_numpy()
             rows.append([label, key, p[key], f"{vals.mean():.4g} ± {vals.std():.2g}", rel(vals.mean(), p[key])])
-    paper_design = get_mechanism("h4", d=13.52484, h=13.88781, Qz=35.18892)
+    paper_design = get_mechanism("h4", **{k: H4_PAPER["Table 1 (max V)"][k] for k in ("d", "h", "Qz")})
     ev_paper = r.memo(evaluate)(paper_design)
-    table2 = get_mechanism("h4", d=1.00008, h=1.09692, Qz=35.48742)
+    table2 = get_mechanism("h4", **{k: H4_PAPER["Table 2 (max GDI)"][k] for k in ("d", "h", "Qz")})
     length_effect = [[f"{label} = {length:.3g} cm", round(ev.volume, 1), round(ev.gdi, 4)]
                      for label, length in (("h (our default)", table2.h), ("sqrt(3) Qz (a rod)", 3**0.5 * table2.Qz),
                                            ("100 cm", 100.0))

@@ -1,0 +1,114 @@
+"""Report step: a dataset's optima beside a paper's printed tables.
+
+``python -m pipeline.paper_report DATASET --paper seed000_h4 [--out FILE.md]``
+reads the dataset the way users do (``pd.read_parquet(DATASET / "best")``),
+keeps the runs of the paper's mechanism, and for each printed table row
+(:mod:`pipeline.papers`) the runs of the same objective (and ``w_d`` for the
+mixed index), one line per optimiser: how many runs, and for V, GDI and each
+design variable the paper's number, ours as mean ± standard deviation over
+the runs, and the relative difference. Rows without runs in the dataset say
+so. It compares; it does not claim a reproduction: each paper file's header
+says what its numbers mean (e.g. the H4 paper's V in cm³ as printed, ours in
+cm³·rad), and ``docs/reproduction.md`` explains every difference.
+
+Typical use: ``python -m pipeline -m +experiment=h4_table3`` (the multirun
+that declares Table 3's sweep), then this report on ``outputs/dataset``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from pipeline.errors import ConfigError
+from pipeline.papers import load_paper, paper_names
+from pipeline.tables import rel, table
+
+#: printed quantity -> dataset column (design variables: ``param_<name>``)
+QUANTITIES = {"V": "volume", "gdi": "gdi"}
+
+
+def _matching(best: pd.DataFrame, mechanism: str, row: dict) -> pd.DataFrame:
+    """The dataset's runs of the paper row's mechanism and objective (and w_d for the mixed index)."""
+    runs = best[(best["mechanism"] == mechanism) & (best["objective"] == row["objective"])]
+    if row.get("w_d") is not None:
+        runs = runs[np.isclose(runs["w_d"].astype(float), float(row["w_d"]), rtol=0.0, atol=1e-9)]
+    return runs
+
+
+def compare(best: pd.DataFrame, paper: dict) -> list[list]:
+    """Rows ``[table, optimiser, runs, quantity, paper, ours (mean ± sd), difference]``.
+
+    Parameters
+    ----------
+    best : DataFrame
+        The dataset's ``best`` table (one row per run; columns ``mechanism``,
+        ``objective``, ``w_d``, ``optimizer``, ``volume``, ``gdi``, ``param_*``).
+    paper : dict
+        A paper's reference data (:func:`pipeline.papers.load_paper`).
+    """
+    out = []
+    for row in paper["rows"]:
+        runs = _matching(best, paper["mechanism"], row)
+        if runs.empty:
+            out.append([row["table"], "-", 0, "-", "-", "no runs in the dataset", "-"])
+            continue
+        quantities = {**QUANTITIES, **{k: f"param_{k}" for k in row
+                                       if k not in (*QUANTITIES, "table", "objective", "w_d")}}
+        for optimizer, group in runs.groupby("optimizer", sort=True):
+            for key, column in quantities.items():
+                if column not in group:
+                    continue
+                values = group[column].to_numpy(dtype=float)
+                mean = float(values.mean())
+                spread = float(values.std()) if len(values) > 1 else math.nan
+                ours = f"{mean:.4g} ± {spread:.2g}" if len(values) > 1 else f"{mean:.4g}"
+                out.append([row["table"], optimizer, len(values), key, row[key], ours, rel(mean, row[key])])
+    return out
+
+
+def report(dataset: Path, paper_name: str) -> str:
+    """The Markdown report of ``dataset`` against ``paper_name`` (ConfigError for bad input)."""
+    paper = load_paper(paper_name)
+    dataset = Path(dataset)
+    if not (dataset / "best").is_dir():
+        raise ConfigError(f"dataset={str(dataset)!r} is invalid: allowed a dataset directory "
+                          f"(holding best/, written by aggregation)")
+    best = pd.read_parquet(dataset / "best")
+    rows = compare(best, paper)
+    return (f"# {paper_name}: the paper's tables beside {dataset}\n\n"
+            f"Ours: mean ± standard deviation over the runs of each objective and optimiser. "
+            f"What the paper's numbers mean: `pipeline/papers/{paper_name}.yaml`.\n\n"
+            + table(["table", "optimiser", "runs", "quantity", "paper", "ours", "difference"], rows) + "\n")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m pipeline.paper_report", description=__doc__.split("\n")[0])
+    parser.add_argument("dataset", type=Path, help="dataset directory (e.g. outputs/dataset)")
+    parser.add_argument("--paper", required=True, help=f"one of {', '.join(paper_names())}")
+    parser.add_argument("--out", type=Path, help="write the Markdown here instead of printing it")
+    args = parser.parse_args(argv)
+    try:
+        text = report(args.dataset, args.paper)
+        if args.out is not None:
+            from pipeline.config import check_writable
+
+            check_writable("--out", args.out)
+            from pipeline.io import write_text
+
+            write_text(args.out, text)
+        else:
+            print(text, end="")
+    except ConfigError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,92 @@
+"""Papers' numbers as data, an experiment declaring its own sweep, and the report step over a dataset."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from hydra import compose, initialize_config_dir
+
+from pipeline.config import CONFIG_DIR, register_configs
+from pipeline.paper_report import compare
+from pipeline.papers import load_paper, paper_names
+from pipeline.readings import H4_PAPER
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_paper_data_is_the_one_source_of_the_h4_tables():
+    assert "seed000_h4" in paper_names()
+    paper = load_paper("seed000_h4")
+    assert paper["mechanism"] == "h4"
+    assert [r["table"] for r in paper["rows"]] == list(H4_PAPER)
+    assert H4_PAPER["Table 3 (w_d = 0.5)"] == dict(V=11304.0, gdi=0.0547, d=12.60003, h=9.06147, Qz=39.61105)
+    for experiment in paper["experiments"].values():  # every objective has its experiment
+        assert (CONFIG_DIR / "experiment" / f"{experiment}.yaml").exists()
+
+
+def test_table3_experiment_declares_its_sweep():
+    register_configs()
+    with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3"):
+        cfg = compose(config_name="config", overrides=["+experiment=h4_table3"], return_hydra_config=True)
+    assert dict(cfg.hydra.sweeper.params) == {"objective.w_d": "0.25,0.5,0.75", "optimizer.seed": "0,1,2"}
+    assert cfg.optimizer.name == "ga" and cfg.objective.name == "mixed" and cfg.mechanism.name == "h4"
+
+
+def test_compare_groups_by_objective_w_d_and_optimiser():
+    best = pd.DataFrame({
+        "mechanism": ["h4"] * 5 + ["tricept"], "objective": ["mixed"] * 4 + ["volume", "mixed"],
+        "w_d": [0.5, 0.5, 0.5, 0.25, 0.0, 0.5], "optimizer": ["ga", "ga", "cmaes", "ga", "ga", "ga"],
+        "volume": [100.0, 200.0, 300.0, 50.0, 70.0, 9.0], "gdi": [0.1, 0.3, 0.2, 0.4, 0.5, 0.9],
+        "param_d": [1.0, 3.0, 2.0, 4.0, 5.0, 6.0], "param_h": [1.0] * 6, "param_Qz": [40.0] * 6})
+    rows = compare(best, load_paper("seed000_h4"))
+    by = {(r[0], r[1], r[3]): r for r in rows}
+    ga_v = by[("Table 3 (w_d = 0.5)", "ga", "V")]
+    assert ga_v[2] == 2 and ga_v[4] == 11304.0
+    assert ga_v[5] == f"{150.0:.4g} ± {np.std([100.0, 200.0]):.2g}"
+    assert ga_v[6] == f"{100 * (150.0 - 11304.0) / 11304.0:+.1f} %"
+    assert by[("Table 3 (w_d = 0.5)", "cmaes", "d")][5] == "2"  # one run: no spread
+    assert by[("Table 1 (max V)", "ga", "gdi")][5] == "0.5"      # the volume objective, whatever w_d
+    assert by[("Table 3 (w_d = 0.25)", "ga", "Qz")][5] == "40"
+    assert ("Table 2 (max GDI)", "-", "-") in by                 # no gdi runs: said so
+    assert not any(r[1] == "ga" and r[3] == "gdi" and r[5] == "0.9" for r in rows)  # the Tricept row is not H4's
+
+
+def test_table3_multirun_then_report(tmp_path):
+    """The experiment's own sweep (3 w_d x 3 seeds, tiny sizes) and the report read back from the dataset."""
+    out = tmp_path / "out"
+    proc = subprocess.run([sys.executable, "-m", "pipeline", "-m", "+experiment=h4_table3", "+debug=fast",
+                           "optimizer.generations=2", "optimizer.population=6", f"paths.output_dir={out}"],
+                          cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    best = pd.read_parquet(out / "dataset" / "best")
+    assert sorted(zip(best["w_d"], best["seed"])) == [(w, s) for w in (0.25, 0.5, 0.75) for s in (0, 1, 2)]
+    report_file = tmp_path / "table3.md"
+    proc = subprocess.run([sys.executable, "-m", "pipeline.paper_report", str(out / "dataset"), "--paper",
+                           "seed000_h4", "--out", str(report_file)], cwd=ROOT, capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    text = report_file.read_text()
+    half = best[np.isclose(best["w_d"], 0.5)]
+    mean_gdi = half["gdi"].mean()
+    assert f"| Table 3 (w_d = 0.5) | ga | 3 | gdi | 0.0547 | {mean_gdi:.4g} ± {half['gdi'].std(ddof=0):.2g} |" in text
+    assert "| Table 1 (max V) | - | 0 | - | - | no runs in the dataset | - |" in text
+
+
+@pytest.mark.parametrize("args, field", [
+    (["{dataset}", "--paper", "seed999"], "--paper='seed999' is invalid: allowed seed000_h4"),
+    (["{missing}", "--paper", "seed000_h4"], "dataset="),
+])
+def test_report_refusals_are_one_line(args, field, tmp_path):
+    dataset = tmp_path / "dataset"
+    (dataset / "best").mkdir(parents=True)
+    values = {"dataset": dataset, "missing": tmp_path / "nope"}
+    proc = subprocess.run([sys.executable, "-m", "pipeline.paper_report", *[a.format(**values) for a in args]],
+                          cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and field in lines[0], proc.stderr
