@@ -264,20 +264,13 @@ def _scaled_copy(jac, p, column_scale, m):
 
 @jit
 def _batch_2x2(jac, column_scale):
-    """2 x 2 batch: closed form on scalars (no scratch matrix, no call)."""
-    count = jac.shape[0]
-    out = np.empty(count)
-    for p in range(count):
-        m00, m01 = jac[p, 0, 0] * column_scale[0], jac[p, 0, 1] * column_scale[1]
-        m10, m11 = jac[p, 1, 0] * column_scale[0], jac[p, 1, 1] * column_scale[1]
-        if math.isfinite(m00 + m01 + m10 + m11):
-            out[p] = _inverse_condition_2x2(m00, m01, m10, m11)
-        elif m00 != m00 or m01 != m01 or m10 != m10 or m11 != m11:
-            out[p] = np.nan
-        elif math.isinf(m00) or math.isinf(m01) or math.isinf(m10) or math.isinf(m11):
-            out[p] = 0.0
-        else:  # finite entries whose sum overflowed
-            out[p] = _inverse_condition_2x2(m00, m01, m10, m11)
+    """2 x 2 batch (see :func:`inverse_condition_batch`): the closed form."""
+    out = np.empty(jac.shape[0])
+    m = np.empty((2, 2))
+    for p in range(jac.shape[0]):
+        kind = _scaled_copy(jac, p, column_scale, m)
+        out[p] = (_inverse_condition_2x2(m[0, 0], m[0, 1], m[1, 0], m[1, 1]) if kind == 0
+                  else (np.nan if kind == 1 else 0.0))
     return out
 
 

@@ -116,8 +116,7 @@ def membership(mechanism: Mechanism, poses: np.ndarray, orientation: tuple[float
     if reachable is None:
         fused = mechanism.reachable_inverse_condition(poses, length)
         if fused is not None:
-            fused[~_within_orientation(mechanism, poses, orientation)] = np.nan
-            return _dexterous(fused, min_inverse_condition), fused
+            return _oriented_and_dexterous(mechanism, poses, fused, orientation, min_inverse_condition)
     n = poses.shape[0]
     ic = np.full(n, np.nan)
     if reachable is None:
@@ -144,6 +143,15 @@ def _within_orientation(mechanism: Mechanism, poses: np.ndarray,
         return np.ones(poses.shape[0], dtype=bool)
     ang = poses[:, angular]
     return row_all((ang >= orientation[0]) & (ang <= orientation[1]))
+
+
+def _oriented_and_dexterous(mechanism: Mechanism, poses: np.ndarray, ic: np.ndarray,
+                            orientation: tuple[float, float], min_inverse_condition: float
+                            ) -> tuple[np.ndarray, np.ndarray]:
+    """The end of a compiled membership test: ``ic`` (N,), 1/kappa of the reachable poses and
+    NaN elsewhere, set to NaN outside the orientation box (in place); returns ``(inside, ic)``."""
+    ic[~_within_orientation(mechanism, poses, orientation)] = np.nan
+    return _dexterous(ic, min_inverse_condition), ic
 
 
 def _dexterous(ic: np.ndarray, min_inverse_condition: float) -> np.ndarray:
@@ -279,8 +287,7 @@ def _integrate_grid(mechanism, resolution, orientation, min_ic, length, fixed, k
             poses[feasible, exact] = 0.5 * (lower[feasible] + upper[feasible])
             extent = np.column_stack([lower, upper])
         if fused is not None:
-            ic[~_within_orientation(mechanism, poses, orientation)] = np.nan
-            inside = _dexterous(ic, min_ic)
+            inside, ic = _oriented_and_dexterous(mechanism, poses, ic, orientation, min_ic)
         else:
             inside, ic = membership(mechanism, poses, orientation, min_ic, length,
                                     reachable=None if exact is None else weight > 0)
