@@ -131,23 +131,21 @@ class DesignEvaluator:
         if n_chunks == 1:
             return _evaluate_chunk(spec, self.resolution, designs)
         backend, _ = get_active_backend()
-        loky = isinstance(backend, LokyBackend)
-        if loky and spec.name not in _COMPILED:
+        pool = worker_pool(self.n_jobs) if isinstance(backend, LokyBackend) else None
+        if pool is not None and spec.name not in _COMPILED:
             # start the workers now: their start-up (a new interpreter and the package's
             # imports, ~1.5 s) then overlaps the compilation below instead of following it
-            pool = worker_pool(self.n_jobs)
             with _sigint_held():
                 for _ in range(self.n_jobs):
                     pool.submit(_start_worker)
         _compile_kernels(spec, designs)
         # contiguous equal chunks: no straggler beyond one design
         chunks = np.array_split(designs, n_chunks)
-        if loky:
+        if pool is not None:
             # loky (the default) straight through a loky executor: joblib's
             # Parallel polls for results every 10 ms, which cost 5-10 ms of every
             # generation (a 30-design H4 batch computes in ~45 ms on 2 workers)
             try:
-                pool = worker_pool(self.n_jobs)
                 with _sigint_held():  # workers (re)start in submit: see _sigint_held
                     futures = [pool.submit(_evaluate_chunk, spec, self.resolution, c) for c in chunks]
                 parts = [f.result() for f in futures]

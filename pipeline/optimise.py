@@ -29,8 +29,7 @@ from kinematics.workspace import default_resolution
 from pipeline.config import MechanismConfig, ObjectiveConfig
 from pipeline.evaluate import evaluation_frame
 from pipeline.objective import EVALUATION_FIELDS, OBJECTIVES, DesignEvaluator, objective_values
-from pipeline.optimizers import (OPTIMIZERS, REFERENCE_EVALUATIONS, REFERENCE_OPTIMIZER, OptimizerConfig,
-                                Problem)
+from pipeline.optimizers import OPTIMIZERS, REFERENCE_OPTIMIZER, OptimizerConfig, Problem, reference_optimum
 from pipeline.optimizers.polish import polish
 from pipeline.sensitivity import flat_intervals
 
@@ -108,11 +107,8 @@ def optimise_design(mechanism: MechanismConfig, resolution: int | None, refine_f
             x, value, found_by = polished.x, polished.fun, "polish"
     reference_value, reference_x = np.nan, np.full(len(names), np.nan)
     if optimizer.reference:
-        ref_cls = OPTIMIZERS[REFERENCE_OPTIMIZER]
-        ref = ref_cls(ref_cls.Config(name=REFERENCE_OPTIMIZER, seed=optimizer.seed,
-                                     max_evaluations=REFERENCE_EVALUATIONS)).run(scalar)
-        ref_polished = polish(scalar, ref.x, ref.fun)
-        reference_value, reference_x = ref_polished.fun, ref_polished.x
+        ref = reference_optimum(scalar, optimizer.seed)
+        reference_value, reference_x = ref.fun, ref.x
         log.info("optimise: reference %s + polish %.6g; %s %.6g (gap %.3g %%)", REFERENCE_OPTIMIZER,
                  reference_value, optimizer.name, value, 100 * (reference_value - value) / abs(reference_value or 1))
     history = result.history.rename(columns={f"x{j}": n for j, n in enumerate(names)})

@@ -37,10 +37,8 @@ from kinematics.workspace import evaluate
 from pipeline.cache import cached
 from pipeline.config import CONFIG_DIR, MechanismConfig, SampleConfig
 from pipeline.objective import DesignEvaluator, objective_values
-from pipeline.optimizers import REFERENCE_EVALUATIONS
+from pipeline.optimizers import reference_optimum
 from pipeline.optimizers.base import Problem
-from pipeline.optimizers.cmaes import CMAES, CMAESConfig
-from pipeline.optimizers.polish import polish
 from pipeline.papers import load_paper
 from pipeline.sample import sample_designs
 
@@ -114,12 +112,12 @@ def h4_table(readings: list[Reading]) -> pd.DataFrame:
 
 
 def _optimum(mechanism: MechanismConfig, objective: str, w_d: float, seed: int = 0) -> tuple[np.ndarray, float]:
-    """IPOP-CMA-ES + polish optimum of one objective (cached), with the reference budget."""
+    """The reference optimum (IPOP-CMA-ES + polish, :func:`~pipeline.optimizers.reference_optimum`)
+    of one objective (cached)."""
     evaluator = DesignEvaluator(mechanism, None, 2)
     problem = Problem(lambda x: objective_values(objective, evaluator.evaluate(x), w_d),
                       mechanism.design.lower, mechanism.design.upper)
-    found = CMAES(CMAESConfig(seed=seed, max_evaluations=REFERENCE_EVALUATIONS)).run(problem)
-    best = polish(problem, found.x, found.fun)
+    best = reference_optimum(problem, seed)
     return best.x, best.fun
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from kinematics.registry import discover
 from pipeline.optimizers.base import OptimizationResult, Optimizer, OptimizerConfig, Problem
+from pipeline.optimizers.polish import PolishResult, polish
 
 OPTIMIZERS: dict[str, type[Optimizer]] = discover(__name__, __path__, Optimizer)
 
@@ -20,5 +21,14 @@ REFERENCE_OPTIMIZER = "cmaes"
 #: the reference is meant as the best we can find
 REFERENCE_EVALUATIONS = 420
 
-__all__ = ["OPTIMIZERS", "REFERENCE_EVALUATIONS", "REFERENCE_OPTIMIZER", "OptimizationResult", "Optimizer", "OptimizerConfig",
-           "Problem"]
+
+def reference_optimum(problem: Problem, seed: int) -> PolishResult:
+    """The reference optimisation of ``problem``: :data:`REFERENCE_OPTIMIZER` with
+    :data:`REFERENCE_EVALUATIONS` evaluations, then the polish step from its best design."""
+    cls = OPTIMIZERS[REFERENCE_OPTIMIZER]
+    found = cls(cls.Config(name=REFERENCE_OPTIMIZER, seed=seed, max_evaluations=REFERENCE_EVALUATIONS)).run(problem)
+    return polish(problem, found.x, found.fun)
+
+
+__all__ = ["OPTIMIZERS", "REFERENCE_EVALUATIONS", "REFERENCE_OPTIMIZER", "OptimizationResult", "Optimizer",
+           "OptimizerConfig", "Problem", "reference_optimum"]
