@@ -20,7 +20,9 @@ import atexit
 import contextlib
 import multiprocessing.resource_tracker
 import signal
+import threading
 from collections.abc import Callable, Iterator
+from concurrent.futures import Future
 from dataclasses import dataclass
 
 import numpy as np
@@ -128,17 +130,15 @@ class DesignEvaluator:
             return np.empty((0, len(EVALUATION_FIELDS)))
         spec = MechanismSpec.of(self.mechanism)
         n_chunks = min(self.n_jobs, designs.shape[0])
-        if n_chunks == 1:
-            return _evaluate_chunk(spec, self.resolution, designs)
         backend, _ = get_active_backend()
-        pool = worker_pool(self.n_jobs) if isinstance(backend, LokyBackend) else None
+        pool = worker_pool(self.n_jobs) if n_chunks > 1 and isinstance(backend, LokyBackend) else None
         if pool is not None and spec.name not in _COMPILED:
             # start the workers now: their start-up (a new interpreter and the package's
             # imports, ~1.5 s) then overlaps the compilation below instead of following it
-            with _sigint_held():
-                for _ in range(self.n_jobs):
-                    pool.submit(_start_worker)
+            _submit(pool, _start_worker, [()] * self.n_jobs)
         _compile_kernels(spec, designs)
+        if n_chunks == 1:
+            return _evaluate_chunk(spec, self.resolution, designs)
         # contiguous equal chunks: no straggler beyond one design
         chunks = np.array_split(designs, n_chunks)
         if pool is not None:
@@ -146,8 +146,7 @@ class DesignEvaluator:
             # Parallel polls for results every 10 ms, which cost 5-10 ms of every
             # generation (a 30-design H4 batch computes in ~45 ms on 2 workers)
             try:
-                with _sigint_held():  # workers (re)start in submit: see _sigint_held
-                    futures = [pool.submit(_evaluate_chunk, spec, self.resolution, c) for c in chunks]
+                futures = _submit(pool, _evaluate_chunk, [(spec, self.resolution, c) for c in chunks])
                 parts = [f.result() for f in futures]
             except BrokenProcessPool:
                 _POOLS.pop(self.n_jobs, None)  # a worker died (e.g. killed): the next batch starts afresh
@@ -179,9 +178,8 @@ def worker_pool(n_jobs: int) -> ProcessPoolExecutor:
     return _POOLS[n_jobs]
 
 
-@contextlib.contextmanager
-def _sigint_held() -> Iterator[None]:
-    """Hold SIGINT back in this thread while work is submitted to a pool.
+def _submit(pool: ProcessPoolExecutor, func: Callable, argument_tuples: list[tuple]) -> list[Future]:
+    """``pool.submit(func, *args)`` for each tuple, with SIGINT blocked in this thread.
 
     Why: Ctrl-C sends SIGINT to the whole process group. A loky worker that
     receives it while it is still importing prints a ``KeyboardInterrupt``
@@ -189,21 +187,45 @@ def _sigint_held() -> Iterator[None]:
     the task. Workers (and loky's manager thread, which may respawn them) are
     started inside ``submit`` and inherit this thread's signal mask, so they
     never see SIGINT: the main process alone handles Ctrl-C and kills them
-    (:func:`shutdown_pools`). A SIGINT that arrives meanwhile stays pending and
-    is raised here as ``KeyboardInterrupt`` when the mask is restored.
+    (:func:`shutdown_pools`).
     """
-    if not hasattr(signal, "pthread_sigmask"):  # Windows: no process-group SIGINT to hold back
-        yield
-        return
+    if not hasattr(signal, "pthread_sigmask"):  # Windows: no process-group SIGINT
+        return [pool.submit(func, *args) for args in argument_tuples]
     # Python 3.11's multiprocessing resource tracker, which loky starts with the
     # first worker, *unblocks* SIGINT after starting (it does not restore the
     # mask): start it before the mask is set
     multiprocessing.resource_tracker.ensure_running()
     previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
-        yield
+        return [pool.submit(func, *args) for args in argument_tuples]
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+@contextlib.contextmanager
+def _sigint_deferred() -> Iterator[None]:
+    """Within the block, a Ctrl-C (SIGINT) is only noted; it is delivered again, to the
+    usual handler, when the block ends.
+
+    Why: numba compiling a kernel must not be interrupted. A ``KeyboardInterrupt``
+    raised inside llvmlite's compile callback is swallowed (the run then goes on
+    as if Ctrl-C had not been pressed), and one raised elsewhere in the compiler
+    can leave a half-built library behind (``RuntimeError: no compiled object
+    yet``). Python runs signal handlers in the main thread only, so elsewhere
+    this does nothing.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    received: list[int] = []
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: received.append(signum))
+    try:
+        yield
+    finally:
+        # None: a handler not installed from Python; the default is the closest
+        signal.signal(signal.SIGINT, signal.SIG_DFL if previous is None else previous)
+        if received:
+            signal.raise_signal(signal.SIGINT)
 
 
 def shutdown_pools(kill: bool = False) -> None:
@@ -221,12 +243,13 @@ _COMPILED: set[str] = set()
 
 
 def _compile_kernels(spec: MechanismSpec, designs: np.ndarray) -> None:
-    """Build the mechanism's compiled kernels here, once, before the workers start.
+    """Build (or load) the mechanism's compiled kernels in this process, once, before evaluating.
 
     Why: numba compiles on first call and caches on disk; without this, every
     worker of the first batch on a new machine compiles the same kernels at
     the same time (~3 s each). After it, workers load them from the disk cache.
     A tiny grid (2 nodes per axis) of the first design that builds is enough.
+    A Ctrl-C during the compilation takes effect once it is done (:func:`_sigint_deferred`).
     """
     if spec.name in _COMPILED:
         return
@@ -235,7 +258,8 @@ def _compile_kernels(spec: MechanismSpec, designs: np.ndarray) -> None:
             mech = spec.build(design)
         except ValueError:
             continue
-        evaluate(mech, **dict(spec.options, resolution=2, error_estimate=False))
+        with _sigint_deferred():
+            evaluate(mech, **dict(spec.options, resolution=2, error_estimate=False))
         _COMPILED.add(spec.name)
         return
 
