@@ -34,6 +34,7 @@ from joblib.parallel import get_active_backend
 
 from kinematics import MECHANISMS
 from kinematics.workspace import evaluate
+from pipeline import compile_ahead
 
 #: scalar fields of one evaluation, in column order (units: kinematics.workspace)
 EVALUATION_FIELDS = ("volume", "gdi", "inverse_condition_min", "inverse_condition_max", "suri",
@@ -258,6 +259,7 @@ def _compile_kernels(spec: MechanismSpec, designs: np.ndarray) -> None:
             mech = spec.build(design)
         except ValueError:
             continue
+        compile_ahead.wait_for(spec.name)  # compiled by the entry point's helper, if it runs
         with _sigint_deferred():
             evaluate(mech, **dict(spec.options, resolution=2, error_estimate=False))
         _COMPILED.add(spec.name)

@@ -1,0 +1,128 @@
+"""Compile the main job's kernels in a second process while the command line starts.
+
+Why: on a machine whose numba cache is empty, the first H4 run compiles its
+kernels (the fused columns kernel and the 4 x 4 conditioning batch, about
+2.8 s) before it can evaluate, while the second core sits idle during the
+~2.3 s of imports and config composition. :func:`start` (called first thing
+by the entry point) runs ``python -m pipeline.compile_ahead``, which
+evaluates a tiny grid of one design of each mechanism of :data:`MECHANISMS`
+(H4, the main job's), so that numba compiles every kernel it uses into its
+on-disk cache, and prints the mechanism's name when done. :func:`wait_for`
+(called before the first evaluation) reads those lines until its mechanism
+is there; the run then loads the kernels from the cache instead of compiling
+them. Results do not change: the same functions are compiled, only in
+another process. Other mechanisms do not wait and compile their own kernels
+as before.
+
+Nothing is started when the cache is known to be warm (a marker written after
+a complete compilation, named by the hash of the ``kinematics`` sources and the
+Python version), when the numpy reference kernels are selected, when
+``PM_DESIGN_COMPILE_AHEAD=0``, or on a single core. This module imports only
+the standard library, so that :func:`start` costs nothing on the critical path.
+"""
+
+from __future__ import annotations
+
+import atexit
+import hashlib
+import importlib.util
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+#: mechanisms whose kernels the helper compiles, in this order: the main job's
+MECHANISMS = ("h4",)
+#: ``PM_DESIGN_COMPILE_AHEAD=0`` turns the helper off (benchmarks measure with and without it)
+SWITCH_ENV = "PM_DESIGN_COMPILE_AHEAD"
+_process: list[subprocess.Popen] = []
+_done: set[str] = set()
+
+
+def _marker() -> Path | None:
+    """Where a complete compilation is recorded (next to numba's cache of the kernels), or None."""
+    spec = importlib.util.find_spec("kinematics")
+    if spec is None or not spec.submodule_search_locations:
+        return None
+    package = Path(list(spec.submodule_search_locations)[0])
+    digest = hashlib.sha256()
+    for source in sorted(package.glob("*.py")):  # the kernels' sources (numba recompiles when they change)
+        digest.update(source.read_bytes())
+    stamp = digest.hexdigest()[:12]
+    root = Path(os.environ["NUMBA_CACHE_DIR"]) if os.environ.get("NUMBA_CACHE_DIR") else package / "__pycache__"
+    return root / f"pm-design-kernels-{stamp}-py{sys.version_info.major}{sys.version_info.minor}.compiled"
+
+
+def wanted(argv: list[str]) -> bool:
+    """False for command lines that evaluate nothing (Hydra's ``--help``, ``--cfg``, ``--info``, ...)."""
+    return all(arg in ("-m", "--multirun") or not arg.startswith("-") for arg in argv)
+
+
+def start() -> None:
+    """Start the compilation in the background unless it is not needed (see the module docstring)."""
+    if _process or (os.cpu_count() or 1) < 2:
+        return
+    if os.environ.get("PM_DESIGN_KERNELS", "numba").strip().lower() == "numpy":
+        return
+    if os.environ.get(SWITCH_ENV, "1").strip() == "0":
+        return
+    marker = _marker()
+    if marker is None or marker.exists():
+        return
+    process = subprocess.Popen([sys.executable, "-m", "pipeline.compile_ahead", str(marker)],
+                               stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+                               preexec_fn=_ignore_sigint)
+    _process.append(process)
+    atexit.register(stop)
+
+
+def _ignore_sigint() -> None:
+    """In the helper before exec: SIGINT ignored (inherited through exec; Python then installs
+    no KeyboardInterrupt handler), so a Ctrl-C stops the run, which ends the helper at exit.
+    (Not at a lower priority: the run waits for it while its fitness workers start.)"""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def wait_for(mechanism: str) -> None:
+    """Block until the helper has compiled ``mechanism``'s kernels, if it compiles them (:data:`MECHANISMS`)."""
+    if not _process or mechanism not in MECHANISMS or mechanism in _done:
+        return
+    for line in _process[0].stdout:  # one line per item compiled; EOF when the helper ends
+        _done.add(line.strip())
+        if mechanism in _done:
+            return
+
+
+def stop() -> None:
+    """End the background process if it is still compiling (at exit)."""
+    for process in _process:
+        if process.poll() is None:
+            process.kill()
+        process.wait()
+        if process.stdout is not None:
+            process.stdout.close()
+    _process.clear()
+
+
+def _compile(marker: Path) -> None:
+    """The background process: compile each mechanism's kernels, say so, then write the marker."""
+    import numpy as np
+
+    from kinematics import MECHANISMS as CLASSES
+    from kinematics.workspace import evaluate
+
+    for name in MECHANISMS:  # a tiny grid of the box's centre design compiles every kernel it uses
+        cls = CLASSES[name]
+        centre = np.array([(v.lower + v.upper) / 2 for v in cls.design_variables])
+        evaluate(cls.from_design(centre, **cls.default_fixed), resolution=2, error_estimate=False)
+        print(name, flush=True)
+    try:
+        marker.parent.mkdir(parents=True, exist_ok=True)
+        marker.touch()
+    except OSError:  # a read-only install: the next run compiles ahead again, harmlessly
+        pass
+
+
+if __name__ == "__main__":
+    _compile(Path(sys.argv[1]))
