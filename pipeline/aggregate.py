@@ -57,7 +57,14 @@ class AggregateReport:
     added: list[str] = field(default_factory=list)
     present: list[str] = field(default_factory=list)
     skipped: list[str] = field(default_factory=list)
-    best: pd.DataFrame | None = None
+    best_tables: list[pa.Table] = field(default_factory=list)
+
+    @property
+    def best(self) -> pd.DataFrame | None:
+        """The ``best`` rows of every complete run found (added or already present), or None."""
+        if not self.best_tables:
+            return None
+        return pd.concat([t.to_pandas() for t in self.best_tables], ignore_index=True)
 
 
 def find_runs(source: Path) -> list[Path]:
@@ -105,7 +112,8 @@ def unify(schemas: list[pa.Schema]) -> pa.Schema:
 
 def conform(table: pa.Table, schema: pa.Schema) -> pa.Table:
     """``table`` with exactly ``schema``'s fields, in its order: absent columns null, types cast."""
-    arrays = [table.column(f.name).cast(f.type) if f.name in table.column_names
+    present = set(table.column_names)
+    arrays = [table.column(f.name).cast(f.type) if f.name in present
               else pa.nulls(table.num_rows, f.type) for f in schema]
     return pa.Table.from_arrays(arrays, schema=pa.schema(list(schema), metadata=table.schema.metadata))
 
@@ -121,14 +129,15 @@ def _locked(dataset_dir: Path):
             fcntl.flock(handle, fcntl.LOCK_UN)
 
 
-def _run_tables(run: Path, manifest: dict) -> dict[str, pa.Table]:
+def _run_tables(run: Path, manifest: dict, best: pa.Table) -> dict[str, pa.Table]:
+    """The run's tables with its ids as leading columns, and its ``runs`` row (``best``: already read)."""
     ids = {"run_id": manifest["run_id"], "launch_id": manifest["launch_id"], "job": int(manifest["job"])}
     out = {}
     for table in TABLES:
         path = run / f"{table}.parquet"
-        if not path.exists():
+        if table != "best" and not path.exists():
             continue
-        data = pq.read_table(path)
+        data = best if table == "best" else pq.read_table(path)
         for k, (name, value) in enumerate(ids.items()):
             typ = pa.int64() if name == "job" else pa.string()
             unit, meaning = column_unit(name)
@@ -173,21 +182,21 @@ def aggregate(sources: Path | list[Path], dataset_dir: Path) -> AggregateReport:
     for line in report.skipped:
         log.warning("aggregate: skipped %s", line)
     dataset_dir.parent.mkdir(parents=True, exist_ok=True)
+    best_tables = {m["run_id"]: pq.read_table(run / "best.parquet") for run, m in records}  # read once
     with _locked(dataset_dir):
         present = dataset_run_ids(dataset_dir)
         new = [(run, m) for run, m in records if m["run_id"] not in present]
         report.present = sorted(m["run_id"] for _, m in records if m["run_id"] in present)
         if new:
-            _build_and_swap(dataset_dir, new)
+            _build_and_swap(dataset_dir, new, best_tables)
         report.added = [m["run_id"] for _, m in new]
-    bests = [pq.read_table(run / "best.parquet").to_pandas() for run, _ in records]
-    report.best = pd.concat(bests, ignore_index=True) if bests else None
+    report.best_tables = list(best_tables.values())
     log.info("aggregate: %d runs added, %d already present, %d skipped -> %s", len(report.added),
              len(report.present), len(report.skipped), dataset_dir)
     return report
 
 
-def _build_and_swap(dataset_dir: Path, new: list[tuple[Path, dict]]) -> None:
+def _build_and_swap(dataset_dir: Path, new: list[tuple[Path, dict]], best_tables: dict[str, pa.Table]) -> None:
     token = secrets.token_hex(4)
     staging = dataset_dir.parent / f".{dataset_dir.name}.staging-{token}"
     try:
@@ -195,7 +204,7 @@ def _build_and_swap(dataset_dir: Path, new: list[tuple[Path, dict]]) -> None:
             shutil.copytree(dataset_dir, staging)
         else:
             staging.mkdir(parents=True)
-        tables = [(m, _run_tables(run, m)) for run, m in new]
+        tables = [(m, _run_tables(run, m, best_tables[m["run_id"]])) for run, m in new]
         for name in DATASET_TABLES:
             fresh = [(m, t[name]) for m, t in tables if name in t]
             if not fresh:

@@ -29,21 +29,28 @@ except PackageNotFoundError:  # a source tree that was not installed
     __version__ = "0+unknown"
 
 
-#: modules that write documents and pages from results, which no cached stage runs: editing their
-#: prose must not throw away hours of cached studies. Everything else is in the key.
-DOCUMENT_WRITERS = ("pipeline/reproduce.py", "pipeline/report.py")
+#: modules (and folders of modules) that write documents and pages from results, which no cached
+#: stage runs: editing their prose must not throw away hours of cached studies. Everything else is
+#: in the key.
+DOCUMENT_WRITERS = ("pipeline/reproduce.py", "pipeline/report.py", "pipeline/paper_report.py",
+                    "pipeline/reproduction/")
+#: data files the cached computations read (the papers' numbers score the readings study)
+DATA_FILES = ("pipeline/papers/*.yaml",)
 
 
 def _source_digest() -> str:
     """Hash of every ``.py`` file of the two packages (names and contents) but
-    :data:`DOCUMENT_WRITERS`, 12 hex digits."""
+    :data:`DOCUMENT_WRITERS`, and of :data:`DATA_FILES`, 12 hex digits."""
     digest = hashlib.sha256()
     for package in (kinematics, pipeline):
         root = Path(package.__file__).parent
-        for path in sorted(root.rglob("*.py")):
-            if str(path.relative_to(root.parent)) in DOCUMENT_WRITERS:
+        data = [p for pattern in DATA_FILES if pattern.startswith(f"{root.name}/")
+                for p in root.glob(pattern.split("/", 1)[1])]
+        for path in sorted([*root.rglob("*.py"), *data]):
+            name = str(path.relative_to(root.parent))
+            if name.startswith(DOCUMENT_WRITERS):
                 continue
-            digest.update(str(path.relative_to(root.parent)).encode())
+            digest.update(name.encode())
             digest.update(path.read_bytes())
     return digest.hexdigest()[:12]
 

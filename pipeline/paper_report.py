@@ -30,7 +30,7 @@ from pipeline.papers import load_paper, paper_names
 from pipeline.tables import rel, table
 
 #: printed quantity -> dataset column (design variables: ``param_<name>``)
-QUANTITIES = {"V": "volume", "gdi": "gdi"}
+QUANTITIES = {"V": "volume", "gdi": "gdi", "lci_min": "inverse_condition_min", "lci_max": "inverse_condition_max"}
 
 
 def _matching(best: pd.DataFrame, mechanism: str, row: dict) -> pd.DataFrame:
@@ -62,7 +62,7 @@ def compare(best: pd.DataFrame, paper: dict) -> list[list]:
                                        if k not in (*QUANTITIES, "table", "objective", "w_d")}}
         for optimizer, group in runs.groupby("optimizer", sort=True):
             for key, column in quantities.items():
-                if column not in group:
+                if key not in row or column not in group:  # not printed for this row, or not in our runs
                     continue
                 values = group[column].to_numpy(dtype=float)
                 mean = float(values.mean())

@@ -47,8 +47,10 @@ H4_PAPER = {row["table"]: {k: row[k] for k in ("V", "gdi", "d", "h", "Qz")}
             for row in load_paper("seed000_h4")["rows"]}
 #: Table 2's V = 4.1887 is 4π/3 to five digits: a floor of the paper's volume routine, not a volume
 H4_DEGENERATE_V = ("Table 2 (max GDI)",)
-#: seed 001 Table 2: V (mm·rad²) and the LCI range; the design with a and b swapped back into their bounds
-TRICEPT_PAPER = dict(V=944.2176, lci_min=0.57, lci_max=0.61, a=200.0, b=300.062, d=20.0)
+#: seed 001 Table 2: V (mm·rad²), the LCI range and the design (a and b swapped back into their bounds),
+#: from pipeline/papers/seed001_tricept.yaml
+TRICEPT_PAPER = {k: v for k, v in load_paper("seed001_tricept")["rows"][0].items()
+                 if k in ("V", "lci_min", "lci_max", "a", "b", "d")}
 
 H4_READINGS = dict(base=("scaled", "tracking", "fixed"), homogenising=("h", "d", "rod", "none"),
                    theta=(45.0, 30.0, 15.0, 0.0))

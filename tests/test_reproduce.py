@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from kinematics import get_mechanism
-from pipeline.reproduce import THESIS, _upper_hull, thesis_jacobian_program
+from pipeline.reproduction.extensions import _upper_hull
+from pipeline.reproduction.rpr3 import THESIS, thesis_jacobian_program
 
 PRINTED = np.array([[-0.855658, 0.190268, -0.0903346], [-0.811356, -0.93643, 0.444595],
                     [-0.00522636, -0.0127963, -0.00770599]])
@@ -34,24 +35,56 @@ def test_upper_hull_drops_concave_points():
     assert _upper_hull(front).tolist() == [[1.0, 0.0], [0.55, 0.5], [0.0, 1.0]]
 
 
-def test_independent_studies_run_side_by_side_and_are_cached(tmp_path):
-    from pipeline.reproduce import Reproduction
+TINY = ("+debug=fast", "optimizer.population=4", "optimizer.generations=2")
 
-    tiny = ["+experiment=rpr2_mixed", "+debug=fast", "optimizer.population=4", "optimizer.generations=2"]
-    specs = [(f"wd{w}", [*tiny, f"objective.w_d={w}"]) for w in (0.0, 1.0)]
+
+def test_experiment_runs_its_declared_sweep_into_one_dataset_and_is_cached(tmp_path):
+    """The document's studies are the experiments' declared sweeps, read back from one dataset."""
+    import pandas as pd
+
+    from pipeline.reproduction.driver import Reproduction
+
     side = Reproduction(tmp_path / "doc", tmp_path / "outputs")
-    first = side.studies(specs)
-    assert side.computed >= 4  # sample, evaluate, optimise of each study (sample may be shared)
+    side.run_experiments([("mixed_tradeoff", TINY), ("mixed_tradeoff", TINY)])  # one batch; the repeat ignored
+    computed = side.computed
+    assert computed >= 9  # every job computed at least its optimisation
+    first = side.experiment("mixed_tradeoff", TINY)  # read back, not run again
+    assert side.computed == computed and len(list(side.runs_dir.rglob("manifest.json"))) == 9
+    assert side.experiment("mixed_tradeoff", TINY)["run_id"].tolist() == first["run_id"].tolist()
+    assert len(side.runs) == 1  # each experiment once in the document's list of optima
+    # the declared sweep: 3 mechanisms x 3 w_d, Hydra's job order (first parameter outermost)
+    assert first["mechanism"].tolist() == ["tricept"] * 3 + ["rpr3"] * 3 + ["rpr2"] * 3
+    assert first["w_d"].tolist() == [0.0, 0.5, 1.0] * 3
+    assert first["overrides"].iloc[4] == "mechanism=rpr3 objective.w_d=0.5"
+    # read the way README tells users: the whole dataset, several mechanisms mixed
+    dataset = pd.read_parquet(side.dataset / "best")
+    assert sorted(dataset["run_id"]) == sorted(first["run_id"])
+    (sweep_dir,) = side.runs_dir.iterdir()  # one experiment, one sweep directory
+    for _, row in first.iterrows():  # the rows are the runs' own best.parquet, unchanged
+        own = pd.read_parquet(sweep_dir / str(row["job"]) / "best.parquet").iloc[0]
+        assert own["volume"] == row["volume"] and own["gdi"] == row["gdi"] and own["w_d"] == row["w_d"]
+    history = side.table("history", first["run_id"].tolist()[:2])
+    assert history["run_id"].unique().tolist() == first["run_id"].tolist()[:2]
+    # a second document recomputes nothing and reads the same numbers; one worker per study or two alike
     again = Reproduction(tmp_path / "doc", tmp_path / "outputs")
-    second = again.studies(specs)
-    assert again.computed == 0  # every stage from the cache
+    second = again.experiment("mixed_tradeoff", TINY)
+    assert again.computed == 0
+    columns = ["mechanism", "w_d", "volume", "gdi", "suri", "objective_value"]
+    assert second[columns].equals(first[columns])
     alone = Reproduction(tmp_path / "doc2", tmp_path / "other")
-    one_by_one = [alone.study(name, overrides) for name, overrides in specs]
-    for (b1, h1), (b2, h2), (b3, h3) in zip(first, second, one_by_one):
-        assert b1.equals(b2) and h1.equals(h2)
-        assert b1.equals(b3)  # one worker per study or two: the same results
-        assert h1.equals(h3)
-    assert first[0][0]["w_d"] == 0.0 and first[1][0]["w_d"] == 1.0
+    alone_rows = [alone.experiment("mixed_tradeoff", (*TINY, f"mechanism={m}", f"objective.w_d={w}")).iloc[0]
+                  for m, w in (("rpr2", 1.0), ("tricept", 0.0))]
+    assert alone_rows[0][columns].equals(first.iloc[8][columns])
+    assert alone_rows[1][columns].equals(first.iloc[0][columns])
+
+
+def test_sweep_jobs_are_hydras_product():
+    from pipeline.reproduction.driver import sweep_jobs
+
+    assert sweep_jobs({"objective.w_d": "0.25,0.5", "optimizer.seed": "0,1"}) == [
+        ["objective.w_d=0.25", "optimizer.seed=0"], ["objective.w_d=0.25", "optimizer.seed=1"],
+        ["objective.w_d=0.5", "optimizer.seed=0"], ["objective.w_d=0.5", "optimizer.seed=1"]]
+    assert sweep_jobs({}) == [[]]
 
 
 @pytest.mark.parametrize("overrides", [
@@ -66,7 +99,7 @@ def test_reproduction_compose_equals_hydras(overrides, tmp_path):
     from omegaconf import OmegaConf
 
     from pipeline.config import CONFIG_DIR
-    from pipeline.reproduce import Reproduction
+    from pipeline.reproduction.driver import Reproduction
 
     r = Reproduction(tmp_path / "doc", tmp_path / "out")
     r.compose([o for o in overrides if "." not in o.split("=", 1)[0]])  # a base kept from another study

@@ -1,0 +1,35 @@
+"""The reproduction document, one module per paper over the experiments that reproduce it.
+
+:func:`write_document` runs, in order, :mod:`.h4` (seed 000), :mod:`.tricept`
+(seed 001), :mod:`.readings_study`, :mod:`.rpr3` (seed 003), :mod:`.rpr2`
+(seed 004) and :mod:`.extensions`. Each paper table or figure is an
+experiment that declares its own sweep; :class:`.driver.Reproduction` runs
+those sweeps into one dataset, and the sections read it back. Driven by
+``python -m pipeline.reproduce``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from pipeline.reproduction import extensions, h4, readings_study, rpr2, rpr3, tricept
+from pipeline.reproduction.driver import Reproduction
+
+
+def write_document(out: Path, output_dir: Path) -> Reproduction:
+    """Run every section into a new :class:`Reproduction` (studies cached under ``output_dir``)."""
+    r = Reproduction(out, output_dir)
+    # the experiments known up front, as one batch (longest jobs first); the readings study's
+    # depend on its results and run as a second batch
+    r.run_experiments([(name, ()) for name in ("tricept_table2", "h4_table1", "h4_table2", "h4_table3", "h4_fig8",
+                                               "h4_pareto", "mixed_tradeoff")])
+    h4.h4_kinematics(r)
+    frames, best_runs = h4.h4_tables(r)
+    h4.h4_figures(r, frames, best_runs)
+    sweep = h4.h4_sweep(r)
+    tricept.tricept(r)
+    readings_study.readings_study(r, frames, sweep)
+    rpr3.rpr3(r)
+    rpr2.rpr2(r)
+    extensions.extensions(r, sweep, best_runs)
+    return r

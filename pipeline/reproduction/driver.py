@@ -1,0 +1,264 @@
+"""The document's driver: runs the experiments' declared sweeps into one dataset and collects sections.
+
+Each paper table or figure is an experiment (``pipeline/conf/experiment/*.yaml``)
+that declares its own sweep in ``hydra.sweeper.params``, the same sweep
+``python -m pipeline -m +experiment=NAME`` runs. :meth:`Reproduction.experiment`
+expands that sweep the way Hydra's basic sweeper does, runs the jobs through
+the cached pipeline (two side by side, one fitness worker each), aggregates
+them into the document's dataset and returns their ``best`` rows read back
+with ``pd.read_parquet`` from that dataset. The sections (one module per
+paper) only read the dataset and write text and figures.
+"""
+
+from __future__ import annotations
+
+import copy
+import logging
+import re
+import secrets
+import threading
+from collections.abc import Sequence
+from pathlib import Path
+
+import pandas as pd
+from hydra import compose, initialize_config_dir
+from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
+from hydra.core.override_parser.overrides_parser import OverridesParser
+from joblib import Parallel, delayed
+from omegaconf import DictConfig, OmegaConf, open_dict
+
+from pipeline.aggregate import aggregate
+from pipeline.cache import cached
+from pipeline.config import CONFIG_DIR, launch_id, register_configs
+from pipeline.run import read_manifest, run_study
+
+#: studies run side by side (each with one fitness worker): the machine's 2 cores
+STUDY_JOBS = 2
+
+
+class ComputeCounter(logging.Handler):
+    """Counts the stages that computed (cache misses) during the run."""
+
+    def __init__(self) -> None:
+        super().__init__(level=logging.INFO)
+        self.count = 0
+
+    def emit(self, record: logging.LogRecord) -> None:
+        if ": computing" in record.getMessage():
+            self.count += 1
+
+
+def _split(overrides: Sequence[str]) -> tuple[tuple[str, ...], list[str]]:
+    """Group choices (keys without a dot: ``+experiment=``, ``mechanism=``) and value overrides."""
+    groups = tuple(o for o in overrides if "." not in o.split("=", 1)[0])
+    return groups, [o for o in overrides if "." in o.split("=", 1)[0]]
+
+
+def with_values(cfg: DictConfig, values: Sequence[str]) -> DictConfig:
+    """``cfg`` with value overrides (``key=value``) applied as Hydra applies them after composing."""
+    for override in OverridesParser.create().parse_overrides(list(values)):
+        OmegaConf.update(cfg, override.key_or_group, override.value(), merge=True)
+    return cfg
+
+
+def _run_counted(base: DictConfig, values: list[str], run_dir: Path, job: int, overrides: list[str]
+                 ) -> tuple[dict[str, Path], int]:
+    """``run_study`` of ``base`` with ``values`` (in a worker: ``base`` is its own copy), and the
+    number of stages it computed."""
+    counter = ComputeCounter()
+    logger = logging.getLogger("pipeline")
+    level = logger.level
+    logger.setLevel(logging.INFO)
+    logger.addHandler(counter)
+    try:
+        return run_study(with_values(base, values), run_dir, job, overrides), counter.count
+    finally:
+        logger.removeHandler(counter)
+        logger.setLevel(level)
+
+
+def sweep_jobs(params: dict[str, str]) -> list[list[str]]:
+    """The jobs of a declared sweep (``hydra.sweeper.params``), as Hydra's basic sweeper orders them.
+
+    ``{"objective.w_d": "0.25,0.5", "optimizer.seed": "0,1"}`` gives
+    ``[["objective.w_d=0.25", "optimizer.seed=0"], ...]`` (4 jobs); no params: one job, no overrides.
+    """
+    parsed = OverridesParser.create().parse_overrides([f"{key}={value}" for key, value in params.items()])
+    return [list(job) for batch in BasicSweeper.split_arguments(parsed, None) for job in batch] or [[]]
+
+
+class Reproduction:
+    """Runs the experiments (cached) into one dataset and collects the document's sections.
+
+    Parameters
+    ----------
+    out : Path
+        Document directory (``reproduction.md``, ``figures/``).
+    output_dir : Path
+        Pipeline outputs: the stage cache (``cache/``) and this document's runs and
+        dataset (``reproduction/<id>/runs``, ``reproduction/<id>/dataset``; a new
+        ``<id>`` per document, so a dataset never mixes two documents' runs).
+    """
+
+    def __init__(self, out: Path, output_dir: Path) -> None:
+        self.out = out
+        self.figures = out / "figures"
+        self.figures.mkdir(parents=True, exist_ok=True)
+        self.output_dir = output_dir
+        self.sections: list[str] = []
+        self.computed = 0  # stages computed (cache misses) by the studies
+        self._bases: dict[tuple[str, ...], DictConfig] = {}  # composed configs by group choices
+        root = output_dir / "reproduction" / f"{launch_id()}-{secrets.token_hex(2)}"
+        self.runs_dir = root / "runs"
+        self.dataset = root / "dataset"
+        self.runs: list[pd.DataFrame] = []  # every experiment's best rows, in the order first read
+        self._ran: dict[str, tuple[list[list[str]], list[Path]]] = {}  # label -> jobs, run directories
+        self._read: set[str] = set()
+        self._sweeps: dict[tuple[str, ...], dict[str, str]] = {}  # declared sweeps by group choices
+        register_configs()
+        # joblib's workers start now, in the background: their start-up (~1.5 s of imports)
+        # then overlaps the composing of the first batch instead of following it (the batch's
+        # Parallel call reuses them: joblib keeps one reusable pool)
+        self._warm = threading.Thread(target=lambda: Parallel(n_jobs=STUDY_JOBS)(delayed(int)() for _ in range(2)),
+                                      daemon=True)
+        self._warm.start()
+
+    # ------------------------------------------------------------ experiments
+    def run_experiments(self, requests: Sequence[tuple[str, Sequence[str]]]) -> None:
+        """Run the declared sweeps of several experiments as one batch, then aggregate them.
+
+        Why one batch: the jobs run :data:`STUDY_JOBS` at a time, and a sweep of
+        3 jobs run alone leaves a core idle for a whole job; a batch of every
+        experiment a section needs idles only at its very end. Each request is
+        ``(name, extra overrides)``; list the longest jobs first. Experiments
+        already run by this document are not run again.
+        """
+        planned = []
+        for name, extra in requests:
+            label, jobs = self._plan(name, extra)
+            if label in self._ran or any(label == p[0] for p in planned):
+                continue
+            sweep_dir = self.runs_dir / label
+            planned.append((label, jobs, [(sweep_dir / str(k), [f"+experiment={name}", *extra, *job])
+                                          for k, job in enumerate(jobs)]))
+        if not planned:
+            return
+        self.studies([spec for _, _, specs in planned for spec in specs])
+        aggregate([self.runs_dir / label for label, _, _ in planned], self.dataset)
+        for label, jobs, specs in planned:
+            self._ran[label] = (jobs, [run_dir for run_dir, _ in specs])
+
+    def experiment(self, name: str, extra: Sequence[str] = ()) -> pd.DataFrame:
+        """Experiment ``name``'s declared sweep (plus ``extra`` overrides), run if not yet; its best rows.
+
+        An ``extra`` override of a swept key replaces that key's sweep (Hydra's precedence).
+
+        Returns
+        -------
+        DataFrame
+            One row per job, in the sweep's job order, read back from the
+            document's dataset (``pd.read_parquet(dataset / "best")``), with the
+            job's overrides in a column ``overrides`` and a label in ``study``.
+        """
+        label, _ = self._plan(name, extra)
+        if label not in self._ran:
+            self.run_experiments([(name, extra)])
+        jobs, run_dirs = self._ran[label]
+        best = self.table("best", [read_manifest(d)["run_id"] for d in run_dirs])
+        best.insert(0, "overrides", [" ".join(job) for job in jobs])
+        best.insert(0, "study", [f"{label} {' '.join(job)}".strip() for job in jobs])
+        if label not in self._read:
+            self._read.add(label)
+            self.runs.append(best)
+        return best
+
+    def _plan(self, name: str, extra: Sequence[str]) -> tuple[str, list[list[str]]]:
+        """The label of an experiment with ``extra`` overrides, and its jobs' overrides."""
+        # as on Hydra's command line, an override of a swept key replaces that key's declared sweep
+        given = {o.split("=", 1)[0].lstrip("+~") for o in extra}
+        params = {key: values for key, values in self._declared_sweep(name).items() if key not in given}
+        label = "+".join([name, *(re.sub(r"[^A-Za-z0-9_.=-]", "_", o.lstrip("+")) for o in extra)])
+        return label, sweep_jobs(params)
+
+    def table(self, table: str, run_ids: Sequence[str]) -> pd.DataFrame:
+        """Rows of a dataset table for ``run_ids``, in that order (``pd.read_parquet`` with a filter)."""
+        frame = pd.read_parquet(self.dataset / table, filters=[("run_id", "in", list(run_ids))])
+        order = {run_id: k for k, run_id in enumerate(run_ids)}
+        frame = frame.iloc[frame["run_id"].map(order).argsort(kind="stable")]
+        return frame.reset_index(drop=True)
+
+    def _declared_sweep(self, name: str) -> dict[str, str]:
+        """``hydra.sweeper.params`` of experiment ``name``."""
+        groups = (f"+experiment={name}",)
+        self._base(groups)
+        return self._sweeps[groups]
+
+    def _base(self, groups: tuple[str, ...]) -> DictConfig:
+        """The config of a set of group choices, composed by Hydra once (with its declared sweep).
+
+        Why: a Hydra compose costs ~0.15 s and the document runs ~75 studies
+        that differ only in values (w_d, seed, ...).
+        """
+        if groups not in self._bases:
+            with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3"):
+                cfg = compose(config_name="config", overrides=list(groups), return_hydra_config=True)
+            with open_dict(cfg):
+                hydra = cfg.pop("hydra")
+            self._sweeps[groups] = {str(k): str(v) for k, v in (hydra.sweeper.params or {}).items()}
+            self._bases[groups] = cfg
+        return self._bases[groups]
+
+    def compose(self, overrides: list[str]) -> DictConfig:
+        """Hydra's config for ``overrides``, composing once per set of group choices.
+
+        Group choices (``+experiment=``, ``+reading=``, ``mechanism=``: keys
+        without a dot) are composed by Hydra and kept (:meth:`_base`); value
+        overrides (dotted keys) are then applied the way Hydra applies them
+        after composing (:func:`with_values`). ``tests/test_reproduce.py``
+        checks the result equals a full compose.
+        """
+        groups, values = _split(overrides)
+        return with_values(copy.deepcopy(self._base(groups)), values)
+
+    def studies(self, specs: list[tuple[Path, list[str]]]) -> list[Path]:
+        """Run independent studies side by side (cached) into the given run directories.
+
+        :data:`STUDY_JOBS` studies at a time, each with one fitness worker
+        (jobs x workers <= cores; results do not depend on the number of
+        workers, and the stage cache ignores it). Each worker receives the
+        composed base and applies the study's values itself (the transfer is
+        the copy: no deep copy here).
+        """
+        side_by_side = min(STUDY_JOBS, len(specs))
+        common = [f"paths.output_dir={self.output_dir}", "plot.enabled=false",
+                  f"parallel.n_jobs={2 if side_by_side == 1 else 1}"]
+        if side_by_side == 1:
+            done = [(run_study(self.compose([*o, *common]), d, k, o), 0)  # counted by main's handler
+                    for k, (d, o) in enumerate(specs)]
+        else:
+            self._warm.join()  # one Parallel call at a time on joblib's pool
+            tasks = []
+            for k, (run_dir, overrides) in enumerate(specs):
+                groups, values = _split([*overrides, *common])
+                tasks.append(delayed(_run_counted)(self._base(groups), values, run_dir, k, overrides))
+            done = Parallel(n_jobs=side_by_side)(tasks)
+        self.computed += sum(computed for _, computed in done)
+        return [run_dir for run_dir, _ in specs]
+
+    # ------------------------------------------------------------ document
+    def memo(self, func):
+        """``func`` cached in the stage cache (the document's own computations: evaluations,
+        readings tables), so a second run only reads them back."""
+        return cached(func, str(self.output_dir / "cache"))
+
+    def cached_figures(self, draw, *args: object) -> None:
+        """Write the PNG files ``draw(*args)`` returns (``{file name: bytes}``) into ``figures/``,
+        drawn once per arguments (cached like :meth:`memo`): a warm document copies them."""
+        for name, data in self.memo(draw)(*args).items():
+            (self.figures / name).write_bytes(data)
+
+    def figure(self, name: str) -> str:
+        return f"figures/{name}"
+
+    def add(self, text: str) -> None:
+        self.sections.append(text.strip() + "\n")
