@@ -165,7 +165,7 @@ def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
     with a band from their minimum to maximum.
     """
     mixed = best[best["objective"].astype(str) == "mixed"]
-    mechanisms = sorted(mixed["mechanism"].astype(str).unique()) or ["(no mixed-index runs)"]
+    mechanisms = sorted(mixed["mechanism"].astype(str).unique()) or ["none"]
     fig, axes = _figure(4.5 * len(mechanisms), 3.8, len(mechanisms))
     for ax, name in zip(axes, mechanisms):
         part = mixed[mixed["mechanism"].astype(str) == name]
@@ -179,7 +179,12 @@ def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
         n_runs = part.groupby("w_d").size()
         ax.set_xlabel("$w_d$ [1]")
         ax.set_ylabel("index [1]")
-        ax.set_title(f"{name}: optima vs $w_d$ (runs per point: {n_runs.max() if len(n_runs) else 0})")
         ax.grid(alpha=0.3)
-        ax.legend(loc="best")
+        if len(stats):
+            ax.set_title(f"{name}: optima vs $w_d$ (runs per point: {n_runs.max()})")
+            ax.legend(loc="best")
+        else:  # a sweep of V or GDI alone: say so rather than draw an empty legend
+            ax.set_title("the mixed index η versus $w_d$")
+            ax.text(0.5, 0.5, "no mixed-index runs in this sweep", ha="center", va="center",
+                    transform=ax.transAxes)
     return _save(fig, path, plot)

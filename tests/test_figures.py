@@ -80,6 +80,22 @@ def test_convergence_tradeoff_and_front_figures(tmp_path, captured):
     assert "η" in captured[0].axes[0].get_ylabel()
 
 
+def test_tradeoff_of_a_sweep_without_mixed_runs_says_so(tmp_path, captured):
+    """A sweep of V or GDI alone (e.g. experiment h4_table1): a labelled figure, no matplotlib warning."""
+    import warnings
+
+    best = pd.DataFrame({"objective": ["volume"] * 3, "mechanism": ["h4"] * 3, "w_d": [0.0] * 3,
+                         "gdi": [0.2, 0.3, 0.4], "suri": [0.1, 0.2, 0.3], "objective_value": [1.0, 2.0, 3.0]})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        path = plot_module.plot_tradeoff(best, tmp_path / "t.png")
+    assert path.exists()
+    (ax,) = captured[0].axes
+    assert ax.get_legend() is None
+    assert any("no mixed-index runs" in text.get_text() for text in ax.texts)
+    assert_labels_have_units(captured[0])
+
+
 def test_vector_format_beside_the_png(tmp_path):
     class Plot:
         format, dpi = "svg", 150
