@@ -61,6 +61,16 @@ def with_values(cfg: DictConfig, values: Sequence[str]) -> DictConfig:
     return cfg
 
 
+def _worker_ready() -> None:
+    """Nothing: unpickling it imports this module, and so everything a study needs, in a new worker.
+
+    Why imports and not a bare no-op: loky takes a worker's memory after its first task as
+    the reference of its leak guard (a worker more than 300 MB above it is replaced, with a
+    warning); a first task that imported nothing would make the first study's imports look
+    like a leak.
+    """
+
+
 def _run_counted(base: DictConfig, values: list[str], run_dir: Path, job: int, overrides: list[str]
                  ) -> tuple[dict[str, Path], int]:
     """``run_study`` of ``base`` with ``values`` (in a worker: ``base`` is its own copy), and the
@@ -119,8 +129,8 @@ class Reproduction:
         # joblib's workers start now, in the background: their start-up (~1.5 s of imports)
         # then overlaps the composing of the first batch instead of following it (the batch's
         # Parallel call reuses them: joblib keeps one reusable pool)
-        self._warm = threading.Thread(target=lambda: Parallel(n_jobs=STUDY_JOBS)(delayed(int)() for _ in range(2)),
-                                      daemon=True)
+        self._warm = threading.Thread(target=lambda: Parallel(n_jobs=STUDY_JOBS)(
+            delayed(_worker_ready)() for _ in range(STUDY_JOBS)), daemon=True)
         self._warm.start()
 
     # ------------------------------------------------------------ experiments
