@@ -27,17 +27,22 @@ import atexit
 import hashlib
 import importlib.util
 import os
+import select
 import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 #: mechanisms whose kernels the helper compiles, in this order: the main job's
 MECHANISMS = ("h4",)
 #: ``PM_DESIGN_COMPILE_AHEAD=0`` turns the helper off (benchmarks measure with and without it)
 SWITCH_ENV = "PM_DESIGN_COMPILE_AHEAD"
+#: seconds the run waits for the helper at most (it takes ~3.5 s on this machine)
+WAIT_LIMIT = 60.0
 _process: list[subprocess.Popen] = []
 _done: set[str] = set()
+_pending = bytearray()  # the helper's output after its last complete line
 
 
 def _marker() -> Path | None:
@@ -71,7 +76,7 @@ def start() -> None:
     if marker is None or marker.exists():
         return
     process = subprocess.Popen([sys.executable, "-m", "pipeline.compile_ahead", str(marker)],
-                               stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+                               stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
                                preexec_fn=_ignore_sigint)
     _process.append(process)
     atexit.register(stop)
@@ -85,13 +90,26 @@ def _ignore_sigint() -> None:
 
 
 def wait_for(mechanism: str) -> None:
-    """Block until the helper has compiled ``mechanism``'s kernels, if it compiles them (:data:`MECHANISMS`)."""
+    """Block until the helper has compiled ``mechanism``'s kernels, if it compiles them (:data:`MECHANISMS`).
+
+    At most :data:`WAIT_LIMIT` seconds: a helper that neither reports nor ends (it should
+    never happen) only costs that wait; the run then compiles the kernels itself.
+    """
     if not _process or mechanism not in MECHANISMS or mechanism in _done:
         return
-    for line in _process[0].stdout:  # one line per item compiled; EOF when the helper ends
-        _done.add(line.strip())
-        if mechanism in _done:
+    fd = _process[0].stdout.fileno()
+    deadline = time.monotonic() + WAIT_LIMIT
+    while mechanism not in _done:
+        remaining = deadline - time.monotonic()
+        if remaining <= 0 or not select.select([fd], [], [], remaining)[0]:
             return
+        chunk = os.read(fd, 4096)
+        if not chunk:  # the helper ended (done, or failed: the run compiles what is missing)
+            return
+        _pending.extend(chunk)
+        *lines, rest = bytes(_pending).split(b"\n")  # one line per item compiled
+        _pending[:] = rest
+        _done.update(line.decode().strip() for line in lines)
 
 
 def stop() -> None:

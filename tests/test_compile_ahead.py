@@ -27,9 +27,11 @@ def fresh_helper(monkeypatch, tmp_path):
     monkeypatch.delenv("PM_DESIGN_KERNELS", raising=False)
     compile_ahead.stop()
     compile_ahead._done.clear()
+    compile_ahead._pending.clear()
     yield tmp_path / "numba"
     compile_ahead.stop()
     compile_ahead._done.clear()
+    compile_ahead._pending.clear()
 
 
 def test_helper_compiles_then_is_skipped(fresh_helper):
@@ -48,6 +50,20 @@ def test_helper_compiles_then_is_skipped(fresh_helper):
     compile_ahead.stop()
     compile_ahead.start()  # the cache is warm now: nothing is started
     assert compile_ahead._process == []
+
+
+def test_a_silent_helper_costs_at_most_the_wait_limit(fresh_helper, monkeypatch):
+    """A helper that neither reports nor ends: the run waits WAIT_LIMIT, then goes on (and compiles itself)."""
+    monkeypatch.setattr(compile_ahead, "WAIT_LIMIT", 0.5)
+    silent = subprocess.Popen([sys.executable, "-c", "import sys, time; sys.stdout.write('h'); sys.stdout.flush(); "
+                               "time.sleep(30)"], stdout=subprocess.PIPE)
+    compile_ahead._process.append(silent)
+    t0 = time.perf_counter()
+    compile_ahead.wait_for("h4")
+    assert 0.4 < time.perf_counter() - t0 < 5.0
+    assert "h4" not in compile_ahead._done and bytes(compile_ahead._pending) == b"h"  # half a line kept
+    compile_ahead.stop()
+    assert silent.poll() is not None  # ended at exit
 
 
 def test_helper_is_off_when_not_wanted(fresh_helper, monkeypatch):
