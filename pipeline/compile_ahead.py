@@ -4,15 +4,15 @@ Why: on a machine whose numba cache is empty, the first H4 run compiles its
 kernels (the fused columns kernel and the 4 x 4 conditioning batch, about
 2.8 s) before it can evaluate, while the second core sits idle during the
 ~2.3 s of imports and config composition. :func:`start` (called first thing
-by the entry point) runs ``python -m pipeline.compile_ahead``, which
-evaluates a tiny grid of one design of each mechanism of :data:`MECHANISMS`
-(H4, the main job's), so that numba compiles every kernel it uses into its
-on-disk cache, and prints the mechanism's name when done. :func:`wait_for`
-(called before the first evaluation) reads those lines until its mechanism
-is there; the run then loads the kernels from the cache instead of compiling
-them. Results do not change: the same functions are compiled, only in
-another process. Other mechanisms do not wait and compile their own kernels
-as before.
+by the entry point) runs ``python -m pipeline.compile_ahead``, which takes
+the default mechanism of ``pipeline/conf/config.yaml`` (H4, the main job's),
+says ``start <name>``, evaluates a tiny grid of one of its designs, so that
+numba compiles every kernel it uses into its on-disk cache, and says
+``done <name>``. :func:`wait_for` (called before the first evaluation) reads
+those lines: a run of that mechanism waits for ``done`` and then loads the
+kernels from the cache instead of compiling them; a run of another mechanism
+goes on at once and compiles its own kernels as before. Results do not
+change: the same functions are compiled, only in another process.
 
 Nothing is started when the cache is known to be warm (a marker written after
 a complete compilation, named by the hash of the ``kinematics`` sources and the
@@ -34,14 +34,14 @@ import sys
 import time
 from pathlib import Path
 
-#: mechanisms whose kernels the helper compiles, in this order: the main job's
-MECHANISMS = ("h4",)
+#: the main config, whose default mechanism the helper compiles
+CONFIG = Path(__file__).resolve().parent / "conf" / "config.yaml"
 #: ``PM_DESIGN_COMPILE_AHEAD=0`` turns the helper off (benchmarks measure with and without it)
 SWITCH_ENV = "PM_DESIGN_COMPILE_AHEAD"
 #: seconds the run waits for the helper at most (it takes ~3.5 s on this machine)
 WAIT_LIMIT = 60.0
 _process: list[subprocess.Popen] = []
-_done: set[str] = set()
+_said: list[str] = []  # the helper's complete lines so far
 _pending = bytearray()  # the helper's output after its last complete line
 
 
@@ -90,26 +90,26 @@ def _ignore_sigint() -> None:
 
 
 def wait_for(mechanism: str) -> None:
-    """Block until the helper has compiled ``mechanism``'s kernels, if it compiles them (:data:`MECHANISMS`).
+    """Block until the helper has compiled ``mechanism``'s kernels, if those are what it compiles.
 
     At most :data:`WAIT_LIMIT` seconds: a helper that neither reports nor ends (it should
     never happen) only costs that wait; the run then compiles the kernels itself.
     """
-    if not _process or mechanism not in MECHANISMS or mechanism in _done:
-        return
-    fd = _process[0].stdout.fileno()
     deadline = time.monotonic() + WAIT_LIMIT
-    while mechanism not in _done:
-        remaining = deadline - time.monotonic()
-        if remaining <= 0 or not select.select([fd], [], [], remaining)[0]:
+    while _process and f"done {mechanism}" not in _said:
+        started = [line.split(" ", 1)[1] for line in _said if line.startswith("start ")]
+        if started and started[0] != mechanism:  # it compiles another mechanism's kernels
             return
-        chunk = os.read(fd, 4096)
+        remaining = deadline - time.monotonic()
+        if remaining <= 0 or not select.select([_process[0].stdout], [], [], remaining)[0]:
+            return
+        chunk = os.read(_process[0].stdout.fileno(), 4096)
         if not chunk:  # the helper ended (done, or failed: the run compiles what is missing)
             return
         _pending.extend(chunk)
-        *lines, rest = bytes(_pending).split(b"\n")  # one line per item compiled
+        *lines, rest = bytes(_pending).split(b"\n")
         _pending[:] = rest
-        _done.update(line.decode().strip() for line in lines)
+        _said.extend(line.decode().strip() for line in lines)
 
 
 def stop() -> None:
@@ -124,17 +124,22 @@ def stop() -> None:
 
 
 def _compile(marker: Path) -> None:
-    """The background process: compile each mechanism's kernels, say so, then write the marker."""
+    """The background process: compile the default mechanism's kernels, say so, then write the marker."""
+    import yaml
+
+    defaults = yaml.safe_load(CONFIG.read_text())["defaults"]
+    name = next(entry["mechanism"] for entry in defaults if isinstance(entry, dict) and "mechanism" in entry)
+    print(f"start {name}", flush=True)  # first, so that a run of another mechanism need not wait
+
     import numpy as np
 
-    from kinematics import MECHANISMS as CLASSES
+    from kinematics import MECHANISMS
     from kinematics.workspace import evaluate
 
-    for name in MECHANISMS:  # a tiny grid of the box's centre design compiles every kernel it uses
-        cls = CLASSES[name]
-        centre = np.array([(v.lower + v.upper) / 2 for v in cls.design_variables])
-        evaluate(cls.from_design(centre, **cls.default_fixed), resolution=2, error_estimate=False)
-        print(name, flush=True)
+    cls = MECHANISMS[name]  # a tiny grid of the box's centre design compiles every kernel it uses
+    centre = np.array([(v.lower + v.upper) / 2 for v in cls.design_variables])
+    evaluate(cls.from_design(centre, **cls.default_fixed), resolution=2, error_estimate=False)
+    print(f"done {name}", flush=True)
     try:
         marker.parent.mkdir(parents=True, exist_ok=True)
         marker.touch()
