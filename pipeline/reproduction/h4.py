@@ -17,13 +17,13 @@ import pandas as pd
 
 from kinematics import MECHANISMS, get_mechanism
 from kinematics.workspace import evaluate
-from pipeline.papers import load_paper
 from pipeline.plot import plot_convergence, plot_workspace
+from pipeline.readings import H4_PAPER
 from pipeline.reproduction.driver import Reproduction
 from pipeline.tables import rel, table
 
-#: the printed rows of Tables 1-3, by table name ("Table 1 (max V)", ...)
-H4_PAPER = {row["table"]: row for row in load_paper("seed000_h4")["rows"]}
+#: the experiments of Tables 1-3 (h4_table3 sweeps w_d as well as the seeds)
+TABLE_EXPERIMENTS = ("h4_table1", "h4_table2", "h4_table3")
 SEEDS = (0, 1, 2)
 
 
@@ -93,9 +93,9 @@ def h4_table_runs(r: Reproduction, extra: tuple[str, ...] = ()) -> dict[str, pd.
     Keys are the paper's table names (``"Table 3 (w_d = 0.5)"``); each frame has
     one row per seed. ``extra``: overrides for every job (e.g. ``+reading=...``).
     """
-    frames = {"Table 1 (max V)": r.experiment("h4_table1", extra),
-              "Table 2 (max GDI)": r.experiment("h4_table2", extra)}
-    for w_d, group in r.experiment("h4_table3", extra).groupby("w_d", sort=True):
+    table1, table2, table3 = (r.experiment(name, extra) for name in TABLE_EXPERIMENTS)
+    frames = {"Table 1 (max V)": table1, "Table 2 (max GDI)": table2}
+    for w_d, group in table3.groupby("w_d", sort=True):
         frames[f"Table 3 (w_d = {w_d:g})"] = group.reset_index(drop=True)
     missing = set(H4_PAPER) - set(frames)
     if missing:
@@ -124,7 +124,8 @@ def h4_tables(r: Reproduction) -> tuple[dict[str, pd.DataFrame], dict[str, pd.Se
         for key, column in (("V", "volume"), ("gdi", "gdi"), ("d", "param_d"), ("h", "param_h"),
                             ("Qz", "param_Qz")):
             vals = frame[column].to_numpy()
-            rows.append([label, "ic" if key == "gdi" else key, p[key], f"{vals.mean():.4g} ± {vals.std():.2g}", rel(vals.mean(), p[key])])
+            rows.append([label, "ic" if key == "gdi" else key, p[key], f"{vals.mean():.4g} ± {vals.std():.2g}",
+                         rel(vals.mean(), p[key])])
     paper_design = get_mechanism("h4", **{k: H4_PAPER["Table 1 (max V)"][k] for k in ("d", "h", "Qz")})
     ev_paper = r.memo(evaluate)(paper_design)
     table2 = get_mechanism("h4", **{k: H4_PAPER["Table 2 (max GDI)"][k] for k in ("d", "h", "Qz")})

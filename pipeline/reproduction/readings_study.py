@@ -15,7 +15,7 @@ import pandas as pd
 
 from pipeline.readings import H4_PAPER
 from pipeline.reproduction.driver import Reproduction
-from pipeline.reproduction.h4 import SEEDS, h4_table_runs
+from pipeline.reproduction.h4 import SEEDS, TABLE_EXPERIMENTS, h4_table_runs
 from pipeline.tables import rel, table
 
 
@@ -55,7 +55,7 @@ def readings_study(r: Reproduction, default_frames: dict[str, pd.DataFrame], def
     table_rows, best_sweep = [], None
     if preset:
         extra = (f"+reading={preset}",)
-        r.run_experiments([(name, extra) for name in ("h4_table1", "h4_table2", "h4_table3", "h4_fig8_coarse")])
+        r.run_experiments([(name, extra) for name in (*TABLE_EXPERIMENTS, "h4_fig8_coarse")])
         frames = h4_table_runs(r, extra)
         for label, p in rd.H4_PAPER.items():
             ours, default_frame = frames[label], default_frames[label]

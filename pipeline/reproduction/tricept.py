@@ -13,13 +13,11 @@ import numpy as np
 
 from kinematics import get_mechanism
 from kinematics.workspace import evaluate
-from pipeline.papers import load_paper
+from pipeline.readings import TRICEPT_PAPER
 from pipeline.reproduction.driver import Reproduction
 from pipeline.reproduction.h4 import bound_positions
 from pipeline.tables import rel, table
 
-#: the printed Table 2 row (V in mm·rad², the LCI range, the design in mm)
-PAPER = load_paper("seed001_tricept")["rows"][0]
 
 
 def tricept(r: Reproduction) -> None:
@@ -31,7 +29,8 @@ def tricept(r: Reproduction) -> None:
         mech = get_mechanism("tricept", a=a, b=b, d=d)
         grid = r.memo(evaluate)(mech, resolution=48, error_estimate=False)
         polar = r.memo(evaluate)(mech, method="polar", resolution=32, error_estimate=False)
-        rows.append([label, PAPER["V"], f"{grid.volume:.1f}", f"{polar.volume:.1f}", rel(grid.volume, PAPER["V"]),
+        rows.append([label, TRICEPT_PAPER["V"], f"{grid.volume:.1f}", f"{polar.volume:.1f}",
+                     rel(grid.volume, TRICEPT_PAPER["V"]),
                      f"{grid.inverse_condition_min:.2f}-{grid.inverse_condition_max:.2f}"])
     runs = r.experiment("tricept_table2")
     best = runs.iloc[int(np.argmax(runs["objective_value"]))]
