@@ -30,7 +30,8 @@ closure ``F_i = |P + r e_i - E_i|^2 - lb^2``.
 Limits: actuators ``theta_min <= theta_i <= theta_max`` (default -40 to 80 deg,
 the range quoted for ABB's IRB 360 FlexPicker); the out-of-plane angle of each
 forearm ``arcsin(y_i / lb)`` within ``passive_limit`` (ball joints of the
-parallelogram, default 45 deg); the platform below the base plane.
+parallelogram, default 45 deg; 90 means no limit); the platform at or below
+``z_max`` (default 0, the base plane), through the box of :meth:`Delta.pose_bounds`.
 
 Design variables: ``r_ratio = r / R`` and ``forearm_ratio = lb / la`` at a
 fixed base radius ``R`` and arm length ``la`` (200 mm each by default).
@@ -60,7 +61,10 @@ class Delta(Mechanism):
     theta_min, theta_max : float
         Actuator range (deg, below the horizontal positive).
     passive_limit : float
-        Largest out-of-plane angle of a forearm (deg), in (0, 90).
+        Largest out-of-plane angle of a forearm (deg), in (0, 90]; 90 is no limit.
+    z_max : float
+        Highest platform height (mm), in (-(la + lb), 0]: a clearance below the
+        base (e.g. -300 mm in Briot et al. 2008, see ``docs/reproduction.md``).
     """
 
     name = "delta"
@@ -68,7 +72,8 @@ class Delta(Mechanism):
     pose_names = ("x", "y", "z")
     angular = (False, False, False)
     length_unit = "mm"
-    default_fixed = {"R": 200.0, "la": 200.0, "theta_min": -40.0, "theta_max": 80.0, "passive_limit": 45.0}
+    default_fixed = {"R": 200.0, "la": 200.0, "theta_min": -40.0, "theta_max": 80.0, "passive_limit": 45.0,
+                     "z_max": 0.0}
     default_nodes = 32**3
     min_resolution = 16
 
@@ -78,21 +83,29 @@ class Delta(Mechanism):
     )
 
     def __init__(self, R: float, r: float, la: float, lb: float, theta_min: float = -40.0,
-                 theta_max: float = 80.0, passive_limit: float = 45.0) -> None:
+                 theta_max: float = 80.0, passive_limit: float = 45.0, z_max: float = 0.0) -> None:
         owner = "Delta"
         self.r, self.R = check_range(owner, "r", r, "R", R)
         self.la = check_positive(owner, "la", la)
         self.lb = check_positive(owner, "lb", lb)
-        lo, hi = float(theta_min), float(theta_max)
+        try:
+            lo, hi, top = float(theta_min), float(theta_max), float(z_max)
+        except (TypeError, ValueError):
+            raise ValueError(f"Delta: parameters 'theta_min', 'theta_max' (deg) and 'z_max' (mm) must be numbers; "
+                             f"got {theta_min!r}, {theta_max!r}, {z_max!r}") from None
         if not (math.isfinite(lo) and math.isfinite(hi) and -180 < lo < hi < 180):
             raise ValueError(f"Delta: parameters 'theta_min' < 'theta_max' must lie in (-180, 180) deg; "
                              f"got {theta_min!r}, {theta_max!r}")
         self.theta_min, self.theta_max = lo, hi
         self.passive_limit = check_positive(owner, "passive_limit", passive_limit)
-        if self.passive_limit >= 90:
-            raise ValueError(f"Delta: parameter 'passive_limit' must be in (0, 90) deg; got {passive_limit!r}")
+        if self.passive_limit > 90:
+            raise ValueError(f"Delta: parameter 'passive_limit' must be in (0, 90] deg; got {passive_limit!r}")
+        self.z_max = top
+        if not -(self.la + self.lb) < top <= 0.0:
+            raise ValueError(f"Delta: parameter 'z_max' must be in ({-(self.la + self.lb):g}, 0] mm "
+                             f"(-(la + lb) to the base plane); got {z_max!r}")
         self._params = {"R": self.R, "r": self.r, "la": self.la, "lb": self.lb, "theta_min": lo,
-                        "theta_max": hi, "passive_limit": self.passive_limit}
+                        "theta_max": hi, "passive_limit": self.passive_limit, "z_max": self.z_max}
         self._cos, self._sin = np.cos(_AZIMUTH), np.sin(_AZIMUTH)
 
     @classmethod
@@ -120,13 +133,15 @@ class Delta(Mechanism):
         return (0.0, 0.0)
 
     def pose_bounds(self, orientation: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
-        """Box of the workspace (mm): within ``R - r + la + lb`` of the axis, below the base plane."""
+        """Box of the workspace (mm): within ``R - r + la + lb`` of the axis, from ``-(la + lb)`` up
+        to ``z_max``."""
         reach = self.R - self.r + self.la + self.lb
-        return np.array([-reach, -reach, -(self.la + self.lb)]), np.array([reach, reach, 0.0])
+        return np.array([-reach, -reach, -(self.la + self.lb)]), np.array([reach, reach, self.z_max])
 
     def reference_volume(self, orientation: tuple[float, float]) -> float:
-        """``V* = pi (R - r + la + lb)^2 (la + lb)`` (mm^3): the cylinder of :meth:`pose_bounds`."""
-        return math.pi * (self.R - self.r + self.la + self.lb) ** 2 * (self.la + self.lb)
+        """``V* = pi (R - r + la + lb)^2 (la + lb + z_max)`` (mm^3): the cylinder inscribing
+        :meth:`pose_bounds`."""
+        return math.pi * (self.R - self.r + self.la + self.lb) ** 2 * (self.la + self.lb + self.z_max)
 
     def plot_slice(self, orientation: tuple[float, float]) -> tuple[dict[str, float], tuple[int, int], str]:
         """The horizontal (x, y) plane at the median height of the workspace."""

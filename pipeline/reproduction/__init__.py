@@ -2,7 +2,7 @@
 
 :func:`write_document` runs, in order, :mod:`.h4` (seed 000), :mod:`.tricept`
 (seed 001), :mod:`.readings_study`, :mod:`.rpr3` (seed 003), :mod:`.rpr2`
-(seed 004) and :mod:`.extensions`. Each paper table or figure is an
+(seed 004), :mod:`.delta` (a published Delta result) and :mod:`.extensions`. Each paper table or figure is an
 experiment that declares its own sweep; :class:`.driver.Reproduction` runs
 those sweeps into one dataset, and the sections read it back. Driven by
 ``python -m pipeline.reproduce``.
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from pipeline.reproduction import extensions, h4, readings_study, rpr2, rpr3, tricept
+from pipeline.reproduction import delta, extensions, h4, readings_study, rpr2, rpr3, tricept
 from pipeline.reproduction.driver import Reproduction
 
 
@@ -31,5 +31,6 @@ def write_document(out: Path, output_dir: Path) -> Reproduction:
     readings_study.readings_study(r, frames, sweep)
     rpr3.rpr3(r)
     rpr2.rpr2(r)
+    delta.delta(r)
     extensions.extensions(r, sweep, best_runs)
     return r
