@@ -22,6 +22,7 @@ Conventions (all mechanisms)
 
 from __future__ import annotations
 
+import functools
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
@@ -297,7 +298,9 @@ class Mechanism(ABC):
         returns ``(axis, lower, upper)``: the variable's column index and, for
         each pose (N,) (whose value in that column is ignored), the interval
         where every actuator stays within its range (``lower > upper`` when
-        none). ``None`` (the default) means no such axis.
+        none). ``None`` (the default) means no such axis. Whether there is
+        one, and which, is a property of the class (the workspace module asks
+        once per class); the interval is the design's.
         """
         return None
 
@@ -412,6 +415,22 @@ class DesignVariable:
 
 def cosine_range(lo: float, hi: float, phase: np.ndarray | float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """Exact min and max of ``cos(angle + phase)`` for ``angle`` in [lo, hi] (rad)."""
+    if np.ndim(phase) == 0:
+        # one phase: a function of the orientation range alone, asked for once per evaluation
+        return _cosine_range_of_scalars(float(lo), float(hi), float(phase))
+    return _cosine_range(lo, hi, phase)
+
+
+@functools.lru_cache(maxsize=256)
+def _cosine_range_of_scalars(lo: float, hi: float, phase: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`cosine_range` of one phase, memoised; the arrays are read-only (shared)."""
+    out = _cosine_range(lo, hi, phase)
+    for arr in out:
+        arr.flags.writeable = False
+    return out
+
+
+def _cosine_range(lo: float, hi: float, phase: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
     phase = np.asarray(phase, dtype=float)
     ends = np.cos(np.stack([lo + phase, hi + phase]))
     cmin, cmax = ends.min(axis=0), ends.max(axis=0)

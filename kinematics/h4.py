@@ -70,6 +70,7 @@ from kinematics.base import (
 _SIGN_P = np.array([-1.0, -1.0, 1.0, 1.0])
 _SIGN_Q = np.array([-1.0, 1.0, 1.0, -1.0])
 _OFFSETS = np.array([[-1.0, -1.0], [-1.0, 1.0], [0.0, 1.0], [1.0, 0.0]])
+_FOLLOWING = np.array([1, 2, 3, 0])
 _ROD_FACTOR = np.array([np.sqrt(3.0), np.sqrt(3.0), np.sqrt(2.0), np.sqrt(2.0)])
 #: eq. 25's base points (cm) at Qz = 42 cm
 _EQ25_BASE = np.array([[-48.0, -48.0], [-48.0, 48.0], [6.0, 48.0], [48.0, -6.0]])
@@ -199,16 +200,20 @@ class H4(Mechanism):
         ``-min(M) <= z <= stroke``.
         """
         lo, hi = float(orientation[0]), float(orientation[1])
-        cmin, cmax = cosine_range(lo, hi)
-        smin, smax = cosine_range(lo, hi, -np.pi / 2)
-        px = np.stack([self.P * cmin, self.P * cmax])  # extremes of P_i cos(theta)
-        py = np.stack([self.P * smin, self.P * smax])
-        x_lo = np.max(self.a - self.M - px.max(axis=0))
-        x_hi = np.min(self.a + self.M - px.min(axis=0))
-        y_lo = np.max(self.b - self.Q - self.M - py.max(axis=0))
-        y_hi = np.min(self.b - self.Q + self.M - py.min(axis=0))
-        return (np.array([x_lo, y_lo, -self.M.min(), lo]),
-                np.array([x_hi, y_hi, self.stroke, hi]))
+        cmin, cmax = (float(v) for v in cosine_range(lo, hi))
+        smin, smax = (float(v) for v in cosine_range(lo, hi, -np.pi / 2))
+        # per leg on Python floats (four legs: numpy's per-call overhead would dominate)
+        x_lo, x_hi, y_lo, y_hi = [], [], [], []
+        for a, b, p, q, m in zip(self.a.tolist(), self.b.tolist(), self.P.tolist(), self.Q.tolist(),
+                                 self.M.tolist()):
+            px = (p * cmin, p * cmax)  # extremes of P_i cos(theta)
+            py = (p * smin, p * smax)
+            x_lo.append(a - m - max(px))
+            x_hi.append(a + m - min(px))
+            y_lo.append(b - q - m - max(py))
+            y_hi.append(b - q + m - min(py))
+        return (np.array([max(x_lo), max(y_lo), -float(self.M.min()), lo]),
+                np.array([min(x_hi), min(y_hi), self.stroke, hi]))
 
     def reference_volume(self, orientation: tuple[float, float]) -> float:
         """``V* = area(base) * z reach * theta range`` (cm^3 rad), seed 000 Sec. 4.3.
@@ -222,7 +227,8 @@ class H4(Mechanism):
         centre = pts.mean(axis=0)
         order = np.argsort(np.arctan2(*(pts - centre).T[::-1]))
         x, y = pts[order].T
-        area = 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+        # shoelace formula; _FOLLOWING: each vertex's successor (np.roll by -1, without its overhead)
+        area = 0.5 * abs(np.dot(x, y[_FOLLOWING]) - np.dot(y, x[_FOLLOWING]))
         angular = orientation_measure(orientation, 1) if self.v_star == "prism_theta" else 1.0
         return area * (self.stroke + self.M.min()) * angular
 
@@ -259,8 +265,9 @@ class H4(Mechanism):
             reach = np.full(4, np.inf)
         else:
             reach = self.M * np.sin(np.radians(self.ball_joint_limit))
-        lower, upper, jac, rows = _h4_columns(np.ascontiguousarray(poses), self.a, self.b, self.P, self.Q,
-                                              self.M, self.stroke, float(axis_lo), float(axis_hi),
+        cos_theta, sin_theta = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 3]))
+        lower, upper, jac, rows = _h4_columns(np.ascontiguousarray(poses), cos_theta, sin_theta, self.a, self.b,
+                                              self.P, self.Q, self.M, self.stroke, float(axis_lo), float(axis_hi),
                                               self.angular_scale(length), reach)
         ic = np.full(poses.shape[0], np.nan)
         ic[rows] = kernels.inverse_condition_batch(jac, np.ones(4))
@@ -451,8 +458,9 @@ def _jacobian_row(jac, k, i, dx, dy, drop, P_i, c, s, column_scale):
 
 
 @kernels.jit
-def _h4_columns(poses, a, b, P, Q, M, stroke, axis_lo, axis_hi, column_scale, reach):
-    """Kernel of :meth:`H4.exact_axis_columns`: eq. 11's z interval and eq. 33's Jacobian per pose.
+def _h4_columns(poses, cos_theta, sin_theta, a, b, P, Q, M, stroke, axis_lo, axis_hi, column_scale, reach):
+    """Kernel of :meth:`H4.exact_axis_columns`: eq. 11's z interval and eq. 33's Jacobian per pose
+    (``cos_theta``, ``sin_theta``: of each pose's theta, :func:`kinematics.kernels.periodic_cos_sin`).
 
     Same operations, in the same order, as ``_horizontal``,
     ``invariant_axis_interval``, ``within_joint_limits`` and ``_jacobian``.
@@ -472,9 +480,9 @@ def _h4_columns(poses, a, b, P, Q, M, stroke, axis_lo, axis_hi, column_scale, re
     dxs = np.empty(4)
     dys = np.empty(4)
     drops = np.empty(4)
+    limited = np.isfinite(reach)
     for p in range(count):
-        x, y, theta = poses[p, 0], poses[p, 1], poses[p, 3]
-        c, s = math.cos(theta), math.sin(theta)
+        x, y, c, s = poses[p, 0], poses[p, 1], cos_theta[p], sin_theta[p]
         lo, hi = -np.inf, np.inf
         reachable = True
         within = True
@@ -486,7 +494,7 @@ def _h4_columns(poses, a, b, P, Q, M, stroke, axis_lo, axis_hi, column_scale, re
             drop = math.sqrt(disc)
             lo = max(lo, -drop)
             hi = min(hi, stroke - drop)
-            if not math.hypot(dx, dy) <= reach[i]:
+            if limited[i] and not math.hypot(dx, dy) <= reach[i]:
                 within = False
             dxs[i], dys[i], drops[i] = dx, dy, drop
         if not reachable:

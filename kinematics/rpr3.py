@@ -212,8 +212,9 @@ class RPR3(Mechanism):
     def _compiled_reachable_jacobian(self, poses: np.ndarray, column_scale: np.ndarray) -> np.ndarray:
         """Eq. 7-9 and the Jacobian of :meth:`_jacobian`, compiled, NaN rows outside
         ``rho_min..rho_max`` (see :func:`_rpr3_reachable_jacobians`)."""
-        return _rpr3_reachable_jacobians(poses, np.ascontiguousarray(self.base), np.ascontiguousarray(self.platform),
-                                         self.rho_min, self.rho_max, column_scale)
+        cos_phi, sin_phi = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 2]))
+        return _rpr3_reachable_jacobians(poses, cos_phi, sin_phi, np.ascontiguousarray(self.base),
+                                         np.ascontiguousarray(self.platform), self.rho_min, self.rho_max, column_scale)
 
     # --------------------------------------------------- forward kinematics
     def _linear_position(self, phi: np.ndarray, q: np.ndarray):
@@ -327,8 +328,9 @@ class RPR3(Mechanism):
 
 
 @kernels.jit
-def _rpr3_reachable_jacobians(poses, base, platform, rho_min, rho_max, column_scale):
-    """Per pose (N, 3) of (x, y, phi) (mm, rad): the legs ``L_i = Rot(phi) B'_i + (x, y) - A_i``,
+def _rpr3_reachable_jacobians(poses, cos_phi, sin_phi, base, platform, rho_min, rho_max, column_scale):
+    """Per pose (N, 3) of (x, y, phi) (mm, rad; ``cos_phi``, ``sin_phi`` of each pose's phi,
+    :func:`kinematics.kernels.periodic_cos_sin`): the legs ``L_i = Rot(phi) B'_i + (x, y) - A_i``,
     the range test ``rho_min <= |L_i| <= rho_max`` (eq. 7-9) and the rows
     ``[L_x, L_y, (Rot(phi) B'_i x L_i)_z] / rho_i`` (as :meth:`RPR3._jacobian`) times
     ``column_scale``. Returns (N, 3, 3); rows of NaN where a leg is out of range
@@ -336,8 +338,7 @@ def _rpr3_reachable_jacobians(poses, base, platform, rho_min, rho_max, column_sc
     count = poses.shape[0]
     out = np.empty((count, 3, 3))
     for p in range(count):
-        x, y, phi = poses[p, 0], poses[p, 1], poses[p, 2]
-        c, s = math.cos(phi), math.sin(phi)
+        x, y, c, s = poses[p, 0], poses[p, 1], cos_phi[p], sin_phi[p]
         for i in range(3):
             arm_x = c * platform[i, 0] - s * platform[i, 1]
             arm_y = s * platform[i, 0] + c * platform[i, 1]

@@ -374,6 +374,25 @@ class Tricept(Mechanism):
         return self._polish(np.array(starts), q, q**2)
 
 
+@kernels.inline_jit
+def _cone_cosine(cone):
+    """``cos(cone)`` for a cone half-angle (rad); -2 when the cone admits every direction (>= pi)."""
+    return math.cos(cone) if cone < math.pi else -2.0
+
+
+@kernels.inline_jit
+def _within_cone(cosine, cone, cone_cosine):
+    """``arccos(cosine) <= cone`` (the numpy path's test, clipped to [-1, 1]); ``cone_cosine`` is
+    :func:`_cone_cosine`. Away from the boundary the answer is the comparison of the cosines
+    (arccos decreases; 1e-12 is far above the rounding of either side), so the arc cosine is
+    computed only within 1e-12 of it: the same answer, without ~15 ns a joint."""
+    if cosine > cone_cosine + 1e-12:
+        return True
+    if cosine < cone_cosine - 1e-12:
+        return False
+    return math.acos(min(max(cosine, -1.0), 1.0)) <= cone
+
+
 @kernels.jit
 def _tricept_reachable_jacobians(poses, platform, base, home_axes, q_min, q_max, base_cone, platform_cone,
                                  home_reference, tilt_limit, column_scale):
@@ -390,14 +409,31 @@ def _tricept_reachable_jacobians(poses, platform, base, home_axes, q_min, q_max,
     out = np.empty((count, 3, 3))
     rot = np.empty((3, 3))
     arm = np.empty(3)
+    # a grid repeats its (psi, theta) pairs with a period (c is the slowest axis): the
+    # trigonometry and the tilt test of the pose one period back are reused when its angles
+    # are the same numbers
+    base_cone_cos, platform_cone_cos = _cone_cosine(base_cone), _cone_cosine(platform_cone)
+    period = 1
+    while period < min(count, 8192) and not (poses[period, 1] == poses[0, 1] and poses[period, 2] == poses[0, 2]):
+        period += 1
+    seen = np.full((period, 2), np.nan)
+    trig = np.empty((period, 4))
+    tilted = np.empty(period, dtype=np.bool_)
     for p in range(count):
         c, psi, theta = poses[p, 0], poses[p, 1], poses[p, 2]
-        cp, sp, ct, st = math.cos(psi), math.sin(psi), math.cos(theta), math.sin(theta)
+        slot = p % period
+        if seen[slot, 0] == psi and seen[slot, 1] == theta:
+            cp, sp, ct, st = trig[slot, 0], trig[slot, 1], trig[slot, 2], trig[slot, 3]
+            ok = tilted[slot]
+        else:
+            cp, sp, ct, st = math.cos(psi), math.sin(psi), math.cos(theta), math.sin(theta)
+            ok = math.acos(min(max(cp * ct, -1.0), 1.0)) <= tilt_limit  # the central joint's tilt
+            seen[slot, 0], seen[slot, 1] = psi, theta
+            trig[slot, 0], trig[slot, 1], trig[slot, 2], trig[slot, 3] = cp, sp, ct, st
+            tilted[slot] = ok
         rot[0, 0], rot[0, 1], rot[0, 2] = ct, sp * st, cp * st
         rot[1, 0], rot[1, 1], rot[1, 2] = 0.0, cp, -sp
         rot[2, 0], rot[2, 1], rot[2, 2] = -st, ct * sp, ct * cp
-        tilt = math.acos(min(max(cp * ct, -1.0), 1.0))
-        ok = tilt <= tilt_limit
         for i in range(3):
             if not ok:
                 break
@@ -419,8 +455,8 @@ def _tricept_reachable_jacobians(poses, platform, base, home_axes, q_min, q_max,
             else:
                 base_cos = nz
                 platform_cos = nx * rot[0, 2] + ny * rot[1, 2] + nz * rot[2, 2]
-            if not (math.acos(min(max(base_cos, -1.0), 1.0)) <= base_cone
-                    and math.acos(min(max(platform_cos, -1.0), 1.0)) <= platform_cone):
+            if not (_within_cone(base_cos, base_cone, base_cone_cos)
+                    and _within_cone(platform_cos, platform_cone, platform_cone_cos)):
                 ok = False
                 break
             # moment r x n of eq. 31

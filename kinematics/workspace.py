@@ -162,16 +162,17 @@ def _dexterous(ic: np.ndarray, min_inverse_condition: float) -> np.ndarray:
 
 # ------------------------------------------------------------------- grid
 def _grid_axes(mechanism: Mechanism, resolution: int, orientation: tuple[float, float],
-               fixed: dict[str, float], offset: float = 0.5, exact_axis: int | None = None
-               ) -> tuple[list[np.ndarray], float]:
+               fixed: dict[str, float], offset: float = 0.5, exact_axis: int | None = None,
+               bounds: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[list[np.ndarray], float]:
     """Grid nodes per pose variable, and the cell measure.
 
     ``offset = 0.5`` gives the midpoint rule; another offset gives an
     interleaved grid of the same resolution (used for the error estimate).
     ``exact_axis`` is integrated analytically: it gets one placeholder node
-    and does not enter the cell measure.
+    and does not enter the cell measure. ``bounds``: the mechanism's
+    ``pose_bounds(orientation)`` when the caller has them already.
     """
-    lo, hi = mechanism.pose_bounds(orientation)
+    lo, hi = mechanism.pose_bounds(orientation) if bounds is None else bounds
     axes: list[np.ndarray] = []
     cell = 1.0
     for j, name in enumerate(mechanism.pose_names):
@@ -214,12 +215,21 @@ def _chunk_bounds(axes: list[np.ndarray]) -> list[tuple[int, int]]:
     return [(start, min(start + step, total)) for start in range(0, total, step)]
 
 
+#: the analytically integrable axis of each mechanism class (a property of its kinematics, not
+#: of a design: probed once per class)
+_EXACT_AXES: dict[type, int | None] = {}
+
+
 def _exact_axis(mechanism: Mechanism, fixed: dict[str, float]) -> int | None:
     """Index of the analytically integrable axis (see ``invariant_axis_interval``), if usable."""
-    probe = mechanism.invariant_axis_interval(np.zeros((1, mechanism.dof)))
-    if probe is None or mechanism.pose_names[probe[0]] in fixed:
+    cls = type(mechanism)
+    if cls not in _EXACT_AXES:
+        probe = mechanism.invariant_axis_interval(np.zeros((1, mechanism.dof)))
+        _EXACT_AXES[cls] = None if probe is None else probe[0]
+    axis = _EXACT_AXES[cls]
+    if axis is None or mechanism.pose_names[axis] in fixed:
         return None
-    return probe[0]
+    return axis
 
 
 def sampled_axes(mechanism: Mechanism, orientation: tuple[float, float],
@@ -260,9 +270,13 @@ def _integrate_grid(mechanism, resolution, orientation, min_ic, length, fixed, k
     weighted mean of 1/kappa.
     """
     exact = _exact_axis(mechanism, fixed)
-    axes, cell = _grid_axes(mechanism, resolution, orientation, fixed, offset, exact)
     box_lo, box_hi = mechanism.pose_bounds(orientation)
+    axes, cell = _grid_axes(mechanism, resolution, orientation, fixed, offset, exact, (box_lo, box_hi))
     total = int(np.prod([len(a) for a in axes]))
+    # the grid's angular nodes all lie in the orientation box (it spans the box): then the
+    # fused path needs no per-node orientation test
+    oriented = all(axis.min() >= orientation[0] and axis.max() <= orientation[1]
+                   for axis, angular in zip(axes, mechanism.angular) if angular)
     weight_sum = ic_sum = 0.0
     n_inside = 0
     ic_min, ic_max = math.inf, -math.inf
@@ -282,16 +296,20 @@ def _integrate_grid(mechanism, resolution, orientation, min_ic, length, fixed, k
             else:
                 lower, upper, ic = fused
             weight = np.clip(upper - lower, 0.0, None)
-            # any z of the interval represents the column (1/kappa does not depend on it)
-            feasible = weight > 0
-            poses[feasible, exact] = 0.5 * (lower[feasible] + upper[feasible])
-            extent = np.column_stack([lower, upper])
+            extent = None
+            if fused is None or keep_samples:  # the fused path needs no pose along the axis
+                # any z of the interval represents the column (1/kappa does not depend on it)
+                feasible = weight > 0
+                poses[feasible, exact] = 0.5 * (lower[feasible] + upper[feasible])
+                extent = np.column_stack([lower, upper])
         if fused is not None:
-            inside, ic = _oriented_and_dexterous(mechanism, poses, ic, orientation, min_ic)
+            # ic is NaN wherever the axis interval is empty, so inside implies weight > 0
+            inside, ic = ((_dexterous(ic, min_ic), ic) if oriented
+                          else _oriented_and_dexterous(mechanism, poses, ic, orientation, min_ic))
         else:
             inside, ic = membership(mechanism, poses, orientation, min_ic, length,
                                     reachable=None if exact is None else weight > 0)
-        inside &= weight > 0
+            inside &= weight > 0
         w = weight[inside]
         vals = ic[inside]
         n_inside += int(inside.sum())

@@ -47,7 +47,7 @@ def test_helper_compiles_then_is_skipped(fresh_helper):
     assert compile_ahead._said == ["start h4", "done h4"]
     compile_ahead._process[0].wait(timeout=60)
     assert marker.exists()  # written after a complete compilation
-    assert any(fresh_helper.rglob("h4._h4_columns-*.nbi")) and any(fresh_helper.rglob("kernels._batch_4x4-*.nbi"))
+    assert any(fresh_helper.rglob("h4._h4_columns-*.nbi")) and any(fresh_helper.rglob("kernels._batch_laguerre-*.nbi"))
     compile_ahead.stop()
     compile_ahead.start()  # the cache is warm now: nothing is started
     assert compile_ahead._process == []

@@ -158,3 +158,64 @@ def test_fused_membership_matches_the_numpy_path(name, extra):
     np.testing.assert_array_equal(np.isnan(ic), np.isnan(ref_ic))
     assert 300 < ref_inside.sum() < len(poses) - 300  # poses both in and out
     np.testing.assert_allclose(ic[ref_inside], ref_ic[ref_inside], rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_blocked_batch_equals_one_matrix_at_a_time(n):
+    """The 3 x 3 / 4 x 4 batch runs its Laguerre passes over blocks of matrices (finite ones
+    gathered, the others set aside): each value must be the one of that matrix alone."""
+    jac = random_matrices(n, 2 * kernels.BLOCK + 37, seed=10 + n)
+    jac[::7, 1, 0] = np.nan
+    jac[3::11, 0, 1] = np.inf
+    jac[5] = 0.0
+    jac[9] = 1e200  # finite entries whose squares overflow
+    scale = np.linspace(1.0, 0.5, n)
+    batch = kernels.inverse_condition_batch(jac, scale)
+    alone = np.array([kernels.inverse_condition_batch(jac[k:k + 1], scale)[0] for k in range(len(jac))])
+    np.testing.assert_array_equal(batch, alone)
+
+
+PERIODIC = [("h4", {}), ("h4", {"ball_joint_limit": 65.0}), ("tricept", {}),
+            ("tricept", {"cone_reference": "home", "tilt_limit": 25.0}), ("rpr3", {})]
+
+
+@pytest.mark.parametrize("name, extra", PERIODIC, ids=[f"{n}-{'-'.join(e) or 'default'}" for n, e in PERIODIC])
+def test_grid_kernels_equal_one_pose_at_a_time(name, extra):
+    """The compiled kernels reuse the trigonometry of the pose one grid period back when its
+    angles are the same numbers: on a grid, on the same poses shuffled, and one pose at a time,
+    every value must be identical."""
+    mech = get_mechanism(name, **{**PAPER_DESIGNS[name], **extra})
+    orientation = mech.default_orientation
+    exact = 2 if name == "h4" else None
+    axes, _ = _grid_axes(mech, 12, orientation, {}, exact_axis=exact)
+    grid = _grid_poses(axes, 0, int(np.prod([len(a) for a in axes])))
+    order = np.random.default_rng(0).permutation(len(grid))
+    if name == "h4":
+        lo, hi = mech.pose_bounds(orientation)
+
+        def run(poses):
+            return np.column_stack(mech.exact_axis_columns(poses, lo[2], hi[2]))
+    else:
+        def run(poses):
+            return mech.reachable_inverse_condition(poses)
+    on_grid = run(grid)
+    assert np.isfinite(on_grid).any() and np.isnan(on_grid).any()
+    np.testing.assert_array_equal(run(grid[order]), on_grid[order])
+    np.testing.assert_array_equal(np.concatenate([run(grid[k:k + 1]) for k in range(len(grid))]), on_grid)
+
+
+def test_cone_test_without_arc_cosine_is_the_arc_cosine_test():
+    """Tricept's joint-cone test compares cosines away from the boundary: within a few ulps of it,
+    and at random, the answer is that of ``arccos(clip(cosine)) <= cone``."""
+    import math
+
+    from kinematics.tricept import _cone_cosine, _within_cone
+
+    rng = np.random.default_rng(0)
+    for cone in (1e-3, 0.3, math.radians(60.0), 1.5, math.pi / 2, 3.0, math.pi, math.inf):
+        edge = math.cos(cone) if cone < math.pi else -1.0
+        near = edge + np.concatenate([np.arange(-40, 41) * np.spacing(max(abs(edge), 1e-300)),
+                                      [-1.1e-12, -0.9e-12, 0.9e-12, 1.1e-12]])
+        for cosine in np.concatenate([near, rng.uniform(-1.0000001, 1.0000001, 2000)]):
+            expected = math.acos(min(max(cosine, -1.0), 1.0)) <= cone
+            assert _within_cone(float(cosine), cone, _cone_cosine(cone)) == expected, (cone, cosine)
