@@ -19,10 +19,11 @@ from pipeline.reproduction.driver import Reproduction
 def write_document(out: Path, output_dir: Path) -> Reproduction:
     """Run every section into a new :class:`Reproduction` (studies cached under ``output_dir``)."""
     r = Reproduction(out, output_dir)
-    # the experiments known up front, as one batch (longest jobs first); the readings study's
-    # depend on its results and run as a second batch
+    # every experiment and the readings study's checks as one batch (the checks and the longest
+    # jobs first): two cores stay busy to its very end
+    readings = readings_study.plan(r)
     r.run_experiments([(name, ()) for name in ("tricept_table2", *h4.TABLE_EXPERIMENTS, "h4_fig8", "h4_pareto",
-                                               "mixed_tradeoff")])
+                                               "mixed_tradeoff")] + readings.requests, readings.tasks)
     h4.h4_kinematics(r)
     frames, best_runs = h4.h4_tables(r)
     h4.h4_figures(r, frames, best_runs)

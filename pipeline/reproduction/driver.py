@@ -134,14 +134,15 @@ class Reproduction:
         self._warm.start()
 
     # ------------------------------------------------------------ experiments
-    def run_experiments(self, requests: Sequence[tuple[str, Sequence[str]]]) -> None:
+    def run_experiments(self, requests: Sequence[tuple[str, Sequence[str]]], alongside: Sequence = ()) -> None:
         """Run the declared sweeps of several experiments as one batch, then aggregate them.
 
         Why one batch: the jobs run :data:`STUDY_JOBS` at a time, and a sweep of
         3 jobs run alone leaves a core idle for a whole job; a batch of every
         experiment a section needs idles only at its very end. Each request is
         ``(name, extra overrides)``; list the longest jobs first. Experiments
-        already run by this document are not run again.
+        already run by this document are not run again. ``alongside``: other
+        independent tasks (:meth:`pending`) run first in the same batch.
         """
         planned = []
         for name, extra in requests:
@@ -152,8 +153,9 @@ class Reproduction:
             planned.append((label, jobs, [(sweep_dir / str(k), [f"+experiment={name}", *extra, *job])
                                           for k, job in enumerate(jobs)]))
         if not planned:
+            self._run_tasks(list(alongside))
             return
-        self.studies([spec for _, _, specs in planned for spec in specs])
+        self.studies([spec for _, _, specs in planned for spec in specs], alongside)
         aggregate([self.runs_dir / label for label, _, _ in planned], self.dataset)
         for label, jobs, specs in planned:
             self._ran[label] = (jobs, [run_dir for run_dir, _ in specs])
@@ -230,36 +232,58 @@ class Reproduction:
         groups, values = _split(overrides)
         return with_values(copy.deepcopy(self._base(groups)), values)
 
-    def studies(self, specs: list[tuple[Path, list[str]]]) -> list[Path]:
+    def studies(self, specs: list[tuple[Path, list[str]]], alongside: Sequence = ()) -> list[Path]:
         """Run independent studies side by side (cached) into the given run directories.
 
         :data:`STUDY_JOBS` studies at a time, each with one fitness worker
         (jobs x workers <= cores; results do not depend on the number of
         workers, and the stage cache ignores it). Each worker receives the
         composed base and applies the study's values itself (the transfer is
-        the copy: no deep copy here).
+        the copy: no deep copy here). ``alongside``: other tasks (:meth:`pending`)
+        run first in the same batch.
         """
-        side_by_side = min(STUDY_JOBS, len(specs))
+        side_by_side = min(STUDY_JOBS, len(specs) + len(alongside))
         common = [f"paths.output_dir={self.output_dir}", "plot.enabled=false",
                   f"parallel.n_jobs={2 if side_by_side == 1 else 1}"]
         if side_by_side == 1:
+            self._run_tasks(list(alongside))
             done = [(run_study(self.compose([*o, *common]), d, k, o), 0)  # counted by main's handler
                     for k, (d, o) in enumerate(specs)]
         else:
-            self._warm.join()  # one Parallel call at a time on joblib's pool
             tasks = []
             for k, (run_dir, overrides) in enumerate(specs):
                 groups, values = _split([*overrides, *common])
                 tasks.append(delayed(_run_counted)(self._base(groups), values, run_dir, k, overrides))
-            done = Parallel(n_jobs=side_by_side)(tasks)
+            done = self._run_tasks([*alongside, *tasks])[len(alongside):]
         self.computed += sum(computed for _, computed in done)
         return [run_dir for run_dir, _ in specs]
+
+    def _run_tasks(self, tasks: list) -> list:
+        """joblib's delayed ``tasks``, :data:`STUDY_JOBS` at a time (in order, results in order)."""
+        if len(tasks) <= 1:
+            return [func(*args, **kwargs) for func, args, kwargs in tasks]
+        self._warm.join()  # one Parallel call at a time on joblib's pool
+        return Parallel(n_jobs=min(STUDY_JOBS, len(tasks)))(tasks)
 
     # ------------------------------------------------------------ document
     def memo(self, func):
         """``func`` cached in the stage cache (the document's own computations: evaluations,
         readings tables), so a second run only reads them back."""
         return cached(func, str(self.output_dir / "cache"))
+
+    def pending(self, func, calls: Sequence[tuple]) -> list:
+        """The calls ``self.memo(func)(*args)`` not yet in the cache, as joblib tasks for
+        :meth:`run_experiments` (``alongside``) or :meth:`memo_map`."""
+        memo = self.memo(func)
+        return [delayed(memo)(*args) for args in calls if not memo.check_call_in_cache(*args)]
+
+    def memo_map(self, func, calls: Sequence[tuple]) -> list:
+        """``[self.memo(func)(*args) for args in calls]``, the calls not yet in the cache computed
+        :data:`STUDY_JOBS` at a time on the studies' workers (independent calls, e.g. the
+        readings study's optimality checks, which would otherwise leave a core idle)."""
+        self._run_tasks(self.pending(func, calls))
+        memo = self.memo(func)
+        return [memo(*args) for args in calls]
 
     def cached_figures(self, draw, *args: object) -> None:
         """Write the PNG files ``draw(*args)`` returns (``{file name: bytes}``) into ``figures/``,

@@ -8,6 +8,7 @@ Fig. 8 under the best reading are the experiments ``h4_table1/2/3`` and
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -23,8 +24,11 @@ def _fmt_pair(v: float, g: float) -> str:
     return f"{v:.4g} / {g:.3f}"
 
 
-def readings_study(r: Reproduction, default_frames: dict[str, pd.DataFrame], default_sweep: pd.DataFrame) -> None:
-    """Which reading of the papers' open choices fits their numbers (pipeline.readings)."""
+def plan(r: Reproduction) -> SimpleNamespace:
+    """What the study needs before its batch: the readings tables (cached, ~0.3 s), the
+    candidate readings, the re-run experiments under the best H4 reading (``requests``) and
+    the candidates' optimality checks not yet cached (``tasks``), so that
+    :func:`pipeline.reproduction.write_document` runs them in its one batch."""
     from pipeline import readings as rd
 
     cache = str(r.output_dir / "cache")
@@ -42,20 +46,52 @@ def readings_study(r: Reproduction, default_frames: dict[str, pd.DataFrame], def
     paper_x = {"max V": np.array([rd.H4_PAPER["Table 1 (max V)"][k] / 100 for k in ("d", "h", "Qz")]),
                "max GDI": np.array([rd.H4_PAPER["Table 2 (max GDI)"][k] / 100 for k in ("d", "h", "Qz")]),
                "η(0.5)": np.array([rd.H4_PAPER["Table 3 (w_d = 0.5)"][k] / 100 for k in ("d", "h", "Qz")])}
-    checks = [r.memo(rd.check_reading)(c, paper_x, cache) for c in candidates]
-    check_rows = [[c["reading"], f"{c['max V paper/optimum']:.3f}", f"{c['max GDI paper/optimum']:.3f}",
-                   f"{c['η(0.5) paper/optimum']:.3f}", f"{c['spearman V-GDI']:+.2f}",
-                   f"{c['GDI at max-V / max GDI']:.2f}",
-                   "none" if c["collapse w_d"] is None else f"{c['collapse w_d']:.2f}",
-                   " → ".join(f"{v:.3g}" for v in c["sweep V"])] for c in checks]
+    # Tricept
+    tri_all = rd.tricept_readings()
+    tri = r.memo(rd.tricept_table)(tri_all)
+    tri_default = rd.Reading("tricept", (("cone_joints", "both"), ("cone_reference", "normal"), ("offset_side", 1),
+                                         ("tilt_limit", None), ("homogenising", "arm")), (-90.0, 90.0))
+    tri_shown = pd.concat([tri.head(8), tri[tri["reading"] == tri_default.label]]).drop_duplicates("reading")
+    tri_rows = [[row["reading"] + (" (default)" if row["reading"] == tri_default.label else ""),
+                 f"{row['score']:.2f}", f"{row['V']:.1f}", f"{row['1/κ min']:.2f}-{row['1/κ max']:.2f}"]
+                for _, row in tri_shown.iterrows()]
+    tri_by_label = {reading.label: reading for reading in tri_all}
+    tri_candidates = [tri_by_label[label] for label in tri["reading"].head(2)]
+    if tri_default not in tri_candidates:
+        tri_candidates.append(tri_default)
+    tri_candidates.append(tri_by_label[tri[tri["reading"].str.contains("tilt_limit=30")]["reading"].iloc[0]])
+    tilt_row = tri[tri["reading"] == tri_candidates[-1].label].iloc[0]
+    tilt_note = (f"1/κ {tilt_row['1/κ min']:.2f}-{tilt_row['1/κ max']:.2f} for the paper's design, the readings "
+                 f"whose smallest 1/κ comes nearest the paper's 0.57")
+    tri_x = {"max V": np.array([rd.TRICEPT_PAPER[k] for k in ("a", "b", "d")])}
+    h4_calls = [(c, paper_x, cache) for c in candidates]
+    tri_calls = [(c, tri_x, cache, (0.0,)) for c in tri_candidates]
+    # the re-runs under the best reading, and the optimality checks (CMA-ES runs)
+    preset = rd.reading_preset(candidates[0])
+    requests = [(name, (f"+reading={preset}",)) for name in (*TABLE_EXPERIMENTS, "h4_fig8_coarse")] if preset else []
+    tasks = r.pending(rd.check_reading, [*tri_calls, *h4_calls])
+    return SimpleNamespace(h4=h4, names=names, rows=rows, paper_row=paper_row, candidates=candidates, default=default,
+                           tri=tri, tri_default=tri_default, tri_rows=tri_rows, tri_candidates=tri_candidates,
+                           tilt_note=tilt_note, h4_calls=h4_calls, tri_calls=tri_calls, preset=preset,
+                           requests=requests, tasks=tasks)
+
+
+def readings_study(r: Reproduction, default_frames: dict[str, pd.DataFrame], default_sweep: pd.DataFrame) -> None:
+    """Which reading of the papers' open choices fits their numbers (pipeline.readings)."""
+    from pipeline import readings as rd
+
+    planned = plan(r)
+    h4, names, rows, paper_row, preset = planned.h4, planned.names, planned.rows, planned.paper_row, planned.preset
+    candidates, default, h4_calls = planned.candidates, planned.default, planned.h4_calls
+    tri, tri_default, tri_rows, tri_candidates = planned.tri, planned.tri_default, planned.tri_rows, planned.tri_candidates
+    tilt_note, tri_calls = planned.tilt_note, planned.tri_calls
     best = candidates[0]
-    preset = rd.reading_preset(best)
     scaled_preset = rd.reading_preset(rd.Reading("h4", (("base", "scaled"), ("homogenising", "none")), (-15.0, 15.0)))
     # Tables 1-3 and Fig. 8 re-run under the best reading (paper GA, same seeds)
     table_rows, best_sweep = [], None
     if preset:
         extra = (f"+reading={preset}",)
-        r.run_experiments([(name, extra) for name in (*TABLE_EXPERIMENTS, "h4_fig8_coarse")])
+        r.run_experiments(planned.requests, planned.tasks)  # already run in write_document's batch
         frames = h4_table_runs(r, extra)
         for label, p in rd.H4_PAPER.items():
             ours, default_frame = frames[label], default_frames[label]
@@ -79,25 +115,13 @@ def readings_study(r: Reproduction, default_frames: dict[str, pd.DataFrame], def
             ax.legend(loc="center left")
         fig.savefig(r.figures / "h4_fig8_readings.png", dpi=150)
         plt.close(fig)
-    # Tricept
-    tri_all = rd.tricept_readings()
-    tri = r.memo(rd.tricept_table)(tri_all)
-    tri_default = rd.Reading("tricept", (("cone_joints", "both"), ("cone_reference", "normal"), ("offset_side", 1),
-                                         ("tilt_limit", None), ("homogenising", "arm")), (-90.0, 90.0))
-    tri_shown = pd.concat([tri.head(8), tri[tri["reading"] == tri_default.label]]).drop_duplicates("reading")
-    tri_rows = [[row["reading"] + (" (default)" if row["reading"] == tri_default.label else ""),
-                 f"{row['score']:.2f}", f"{row['V']:.1f}", f"{row['1/κ min']:.2f}-{row['1/κ max']:.2f}"]
-                for _, row in tri_shown.iterrows()]
-    tri_by_label = {reading.label: reading for reading in tri_all}
-    tri_candidates = [tri_by_label[label] for label in tri["reading"].head(2)]
-    if tri_default not in tri_candidates:
-        tri_candidates.append(tri_default)
-    tri_candidates.append(tri_by_label[tri[tri["reading"].str.contains("tilt_limit=30")]["reading"].iloc[0]])
-    tilt_row = tri[tri["reading"] == tri_candidates[-1].label].iloc[0]
-    tilt_note = (f"1/κ {tilt_row['1/κ min']:.2f}-{tilt_row['1/κ max']:.2f} for the paper's design, the readings "
-                 f"whose smallest 1/κ comes nearest the paper's 0.57")
-    tri_x = {"max V": np.array([rd.TRICEPT_PAPER[k] for k in ("a", "b", "d")])}
-    tri_checks = [r.memo(rd.check_reading)(c, tri_x, cache, sweep=(0.0,)) for c in tri_candidates]
+    checks = r.memo_map(rd.check_reading, h4_calls)
+    check_rows = [[c["reading"], f"{c['max V paper/optimum']:.3f}", f"{c['max GDI paper/optimum']:.3f}",
+                   f"{c['η(0.5) paper/optimum']:.3f}", f"{c['spearman V-GDI']:+.2f}",
+                   f"{c['GDI at max-V / max GDI']:.2f}",
+                   "none" if c["collapse w_d"] is None else f"{c['collapse w_d']:.2f}",
+                   " → ".join(f"{v:.3g}" for v in c["sweep V"])] for c in checks]
+    tri_checks = r.memo_map(rd.check_reading, tri_calls)
     tri_check_rows = [[c["reading"], f"{c['max V optimum']:.1f}",
                        ", ".join(f"{v:.4g}" for v in c["max V design"]), f"{c['max V paper/optimum']:.3f}",
                        f"{c['spearman V-GDI']:+.2f}"] for c in tri_checks]
@@ -114,7 +138,7 @@ Each choice a paper leaves open is a named option of the mechanism (`mechanism.f
 command line; the docstrings of `kinematics/h4.py` and `kinematics/tricept.py` give the equation
 each one interprets). Generated by `pipeline/readings.py`.
 
-### H4: {len(h4_all)} readings × the paper's five designs
+### H4: {len(h4)} readings × the paper's five designs
 
 Each cell is V [cm³·rad, or cm³ at constant θ] / GDI of the paper's design under that reading.
 Score: mean |ln(ours/paper)| over V and GDI of the five designs (Table 2's V = 4.1887 = 4π/3 is
@@ -147,7 +171,7 @@ V / GDI, mean over the seeds; differences are to the paper.
 
 ![Fig. 8 under two readings](figures/h4_fig8_readings.png)
 
-### Tricept: {len(tri_all)} readings × the paper's Table 2 design (a, b, d) = (200, 300.062, 20)
+### Tricept: {len(tri)} readings × the paper's Table 2 design (a, b, d) = (200, 300.062, 20)
 
 Score: mean |ln(ours/paper)| over V = 944.2 mm·rad² and the LCI range 0.57-0.61 (our 1/κ min and
 max over the workspace). The best eight and the default:
