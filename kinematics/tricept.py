@@ -307,8 +307,10 @@ class Tricept(Mechanism):
         ``J``, compiled (see :func:`_tricept_reachable_jacobians`)."""
         cone = self.cone_limit
         tilt = math.radians(self.tilt_limit) if self.tilt_limit is not None else np.inf
+        cos_psi, sin_psi = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 1]))
+        cos_theta, sin_theta = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 2]))
         return _tricept_reachable_jacobians(
-            poses, np.ascontiguousarray(self.p), np.ascontiguousarray(self.base),
+            poses, cos_psi, sin_psi, cos_theta, sin_theta, np.ascontiguousarray(self.p), np.ascontiguousarray(self.base),
             np.ascontiguousarray(self._home_axes), self.q_min, self.q_max,
             cone if self.cone_joints in ("both", "base") else np.inf,
             cone if self.cone_joints in ("both", "platform") else np.inf,
@@ -382,8 +384,8 @@ def _cone_cosine(cone):
 
 @kernels.inline_jit
 def _within_cone(cosine, cone, cone_cosine):
-    """``arccos(cosine) <= cone`` (the numpy path's test, clipped to [-1, 1]); ``cone_cosine`` is
-    :func:`_cone_cosine`. Away from the boundary the answer is the comparison of the cosines
+    """``arccos(cosine) <= cone`` (the numpy path's test of a joint cone or of the central joint's
+    tilt, clipped to [-1, 1]); ``cone_cosine`` is :func:`_cone_cosine`. Away from the boundary the answer is the comparison of the cosines
     (arccos decreases; 1e-12 is far above the rounding of either side), so the arc cosine is
     computed only within 1e-12 of it: the same answer, without ~15 ns a joint."""
     if cosine > cone_cosine + 1e-12:
@@ -394,9 +396,10 @@ def _within_cone(cosine, cone, cone_cosine):
 
 
 @kernels.jit
-def _tricept_reachable_jacobians(poses, platform, base, home_axes, q_min, q_max, base_cone, platform_cone,
-                                 home_reference, tilt_limit, column_scale):
-    """Per pose (N, 3) of (c, psi, theta) (mm, rad): ``R = R_y(theta) R_x(psi)`` (eq. 1),
+def _tricept_reachable_jacobians(poses, cos_psi, sin_psi, cos_theta, sin_theta, platform, base, home_axes, q_min,
+                                 q_max, base_cone, platform_cone, home_reference, tilt_limit, column_scale):
+    """Per pose (N, 3) of (c, psi, theta) (mm, rad; the cosines and sines of psi and theta from
+    :func:`kinematics.kernels.periodic_cos_sin`): ``R = R_y(theta) R_x(psi)`` (eq. 1),
     legs ``R p_i + c k - b_i`` and their lengths (eq. 1-5) within ``q_min..q_max``,
     the joint cone angles (rad) within ``base_cone`` / ``platform_cone`` (inf: not
     limited) against the normals or, with ``home_reference``, the home leg axes
@@ -409,28 +412,12 @@ def _tricept_reachable_jacobians(poses, platform, base, home_axes, q_min, q_max,
     out = np.empty((count, 3, 3))
     rot = np.empty((3, 3))
     arm = np.empty(3)
-    # a grid repeats its (psi, theta) pairs with a period (c is the slowest axis): the
-    # trigonometry and the tilt test of the pose one period back are reused when its angles
-    # are the same numbers
     base_cone_cos, platform_cone_cos = _cone_cosine(base_cone), _cone_cosine(platform_cone)
-    period = 1
-    while period < min(count, 8192) and not (poses[period, 1] == poses[0, 1] and poses[period, 2] == poses[0, 2]):
-        period += 1
-    seen = np.full((period, 2), np.nan)
-    trig = np.empty((period, 4))
-    tilted = np.empty(period, dtype=np.bool_)
+    tilt_cos = _cone_cosine(tilt_limit)
     for p in range(count):
-        c, psi, theta = poses[p, 0], poses[p, 1], poses[p, 2]
-        slot = p % period
-        if seen[slot, 0] == psi and seen[slot, 1] == theta:
-            cp, sp, ct, st = trig[slot, 0], trig[slot, 1], trig[slot, 2], trig[slot, 3]
-            ok = tilted[slot]
-        else:
-            cp, sp, ct, st = math.cos(psi), math.sin(psi), math.cos(theta), math.sin(theta)
-            ok = math.acos(min(max(cp * ct, -1.0), 1.0)) <= tilt_limit  # the central joint's tilt
-            seen[slot, 0], seen[slot, 1] = psi, theta
-            trig[slot, 0], trig[slot, 1], trig[slot, 2], trig[slot, 3] = cp, sp, ct, st
-            tilted[slot] = ok
+        c = poses[p, 0]
+        cp, sp, ct, st = cos_psi[p], sin_psi[p], cos_theta[p], sin_theta[p]
+        ok = _within_cone(cp * ct, tilt_limit, tilt_cos)  # the central joint's tilt
         rot[0, 0], rot[0, 1], rot[0, 2] = ct, sp * st, cp * st
         rot[1, 0], rot[1, 1], rot[1, 2] = 0.0, cp, -sp
         rot[2, 0], rot[2, 1], rot[2, 2] = -st, ct * sp, ct * cp

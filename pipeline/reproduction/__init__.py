@@ -29,7 +29,7 @@ def write_document(out: Path, output_dir: Path) -> Reproduction:
     h4.h4_figures(r, frames, best_runs)
     sweep = h4.h4_sweep(r)
     tricept.tricept(r)
-    readings_study.readings_study(r, frames, sweep)
+    readings_study.readings_study(r, readings, frames, sweep)
     rpr3.rpr3(r)
     rpr2.rpr2(r)
     delta.delta(r)

@@ -76,11 +76,12 @@ def plan(r: Reproduction) -> SimpleNamespace:
                            requests=requests, tasks=tasks)
 
 
-def readings_study(r: Reproduction, default_frames: dict[str, pd.DataFrame], default_sweep: pd.DataFrame) -> None:
-    """Which reading of the papers' open choices fits their numbers (pipeline.readings)."""
+def readings_study(r: Reproduction, planned: SimpleNamespace, default_frames: dict[str, pd.DataFrame],
+                   default_sweep: pd.DataFrame) -> None:
+    """Which reading of the papers' open choices fits their numbers (pipeline.readings); ``planned``
+    is :func:`plan`'s (its re-runs and checks run in the document's batch or, if not, here)."""
     from pipeline import readings as rd
 
-    planned = plan(r)
     h4, names, rows, paper_row, preset = planned.h4, planned.names, planned.rows, planned.paper_row, planned.preset
     candidates, default, h4_calls = planned.candidates, planned.default, planned.h4_calls
     tri, tri_default, tri_rows, tri_candidates = planned.tri, planned.tri_default, planned.tri_rows, planned.tri_candidates
@@ -91,7 +92,6 @@ def readings_study(r: Reproduction, default_frames: dict[str, pd.DataFrame], def
     table_rows, best_sweep = [], None
     if preset:
         extra = (f"+reading={preset}",)
-        r.run_experiments(planned.requests, planned.tasks)  # already run in write_document's batch
         frames = h4_table_runs(r, extra)
         for label, p in rd.H4_PAPER.items():
             ours, default_frame = frames[label], default_frames[label]
