@@ -38,12 +38,13 @@ from hydra.types import RunMode
 from joblib import parallel_config
 from omegaconf import DictConfig
 
+from pipeline import workers
 from pipeline.cache import CODE_VERSION, cached
 from pipeline.config import Config, launch_id, validate
 from pipeline.errors import ConfigError, RunError
 from pipeline.evaluate import evaluate_designs
 from pipeline.io import git_commit, write_bytes, write_parquet, write_text
-from pipeline.objective import EVALUATION_FIELDS, objective_values, shutdown_pools
+from pipeline.objective import EVALUATION_FIELDS, objective_values
 from pipeline.optimise import optimise_design
 from pipeline.plot import run_figures
 from pipeline.sample import sample_designs
@@ -238,7 +239,7 @@ def remove_if_empty(path: Path, levels: int = 3) -> None:
 
 def shutdown_workers() -> None:
     """End the fitness workers and joblib's reusable ones (after Ctrl-C, so none outlives the run)."""
-    shutdown_pools(kill=True)
+    workers.shutdown_workers(kill=True)
     try:
         from joblib.externals.loky import get_reusable_executor
 

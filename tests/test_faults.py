@@ -357,13 +357,14 @@ def test_workers_never_see_ctrl_c(tmp_path):
     script = tmp_path / "masks.py"
     script.write_text(
         "import signal, numpy as np\n"
-        "from pipeline import objective\n"
+        "from pipeline import objective, workers\n"
         "from pipeline.config import MechanismConfig\n"
-        "objective.DesignEvaluator(MechanismConfig(name='rpr2'), 40, 2).evaluate(np.array([[5.0, 6.0], [4.0, 7.0]]))\n"
+        "designs = np.array([[5.0, 6.0], [4.0, 7.0], [4.5, 6.5]])\n"
+        "objective.DesignEvaluator(MechanismConfig(name='rpr2'), 40, 3).evaluate(designs)\n"
         "def blocked(pid):\n"
         "    line = next(ln for ln in open(f'/proc/{pid}/status') if ln.startswith('SigBlk:'))\n"
         "    return bool(int(line.split()[1], 16) >> (signal.SIGINT - 1) & 1)\n"
-        "pids = list(objective._POOLS[2]._processes)\n"
+        "pids = [pid for group in workers._GROUPS.values() for pid in group.pids]\n"
         "print(len(pids), all(blocked(p) for p in pids), signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, []))\n")
     proc = subprocess.run([sys.executable, str(script)], cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
@@ -371,14 +372,14 @@ def test_workers_never_see_ctrl_c(tmp_path):
 
 
 def test_ctrl_c_during_kernel_compilation_is_deferred_not_lost(tmp_path):
-    """Within _sigint_deferred (around numba's compile) SIGINT is noted, not raised; it is
+    """Within sigint_deferred (around numba's compile) SIGINT is noted, not raised; it is
     raised once the block ends, through the usual handler."""
     script = tmp_path / "deferred.py"
     script.write_text(
         "import os, signal, time\n"
-        "from pipeline.objective import _sigint_deferred\n"
+        "from pipeline.workers import sigint_deferred\n"
         "try:\n"
-        "    with _sigint_deferred():\n"
+        "    with sigint_deferred():\n"
         "        os.kill(os.getpid(), signal.SIGINT)\n"
         "        time.sleep(0.2)\n"
         "        print('block finished', flush=True)\n"
@@ -400,9 +401,9 @@ def test_workers_of_a_killed_run_exit_once_idle(tmp_path):
     script = tmp_path / "killed.py"
     script.write_text(
         "import os, numpy as np\n"
-        "from pipeline import objective\n"
+        "from pipeline import objective, workers\n"
         "from pipeline.config import MechanismConfig\n"
-        "objective.WORKER_IDLE_TIMEOUT = 1\n"
+        "workers.WORKER_IDLE_TIMEOUT = 1\n"
         "objective.DesignEvaluator(MechanismConfig(name='rpr2'), 40, 2).evaluate(np.array([[5.0, 6.0], [4.0, 7.0]]))\n"
         "print(os.getpid(), flush=True)\n"
         "os.kill(os.getpid(), 9)\n")

@@ -154,12 +154,14 @@ def test_ga_bit_identical_across_workers_and_dask():
 
     one = run_tiny(1)
     two = run_tiny(2)
+    three = run_tiny(3)  # this process and two worker processes
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                       dashboard_address=None) as cluster, Client(cluster):
         with parallel_config(backend="dask"):
             dask = run_tiny(2)
     cols = [c for c in one.history.columns if c != "wall_time"]
     assert one.history[cols].equals(two.history[cols])
+    assert one.history[cols].equals(three.history[cols])
     assert one.history[cols].equals(dask.history[cols])
     assert one.fun == two.fun == dask.fun
     np.testing.assert_array_equal(one.x, dask.x)

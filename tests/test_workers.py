@@ -1,0 +1,126 @@
+"""The worker group behind the parallel batch evaluation (``pipeline.workers``).
+
+Its requests travel over one socket per worker, so the cases that matter are
+the ones where the two ends could fall out of step: an exception on either
+side, a worker that dies, a group used again afterwards.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import time
+
+import numpy as np
+import pytest
+from joblib.externals.loky.process_executor import BrokenProcessPool
+
+from pipeline import workers
+from pipeline.config import MechanismConfig
+from pipeline.objective import DesignEvaluator
+
+
+def scaled(values: np.ndarray, factor: float) -> np.ndarray:
+    return np.asarray(values) * factor
+
+
+def fail(message: str) -> None:
+    raise ValueError(message)
+
+
+class Unpicklable(Exception):
+    def __reduce__(self):
+        raise TypeError("this exception does not pickle")
+
+
+def fail_unpicklably() -> None:
+    raise Unpicklable("raised in a worker")
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as stat:
+            return stat.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.fixture
+def group():
+    group = workers.WorkerGroup(2, preload=("numpy",))
+    yield group
+    group.close(kill=True)
+
+
+def test_map_returns_the_local_result_first_then_each_request_in_order(group):
+    out = group.map(scaled, [(np.arange(3.0), 2.0), (np.arange(3.0), -1.0)], local=lambda: "here")
+    assert out[0] == "here"
+    np.testing.assert_array_equal(out[1], [0.0, 2.0, 4.0])
+    np.testing.assert_array_equal(out[2], [0.0, -1.0, -2.0])
+    assert len(set(group.pids)) == 2 and os.getpid() not in group.pids
+    # fewer requests than workers, and many batches in a row
+    for k in range(20):
+        assert group.map(scaled, [(k, 3.0)], local=lambda: None)[1] == 3.0 * k
+
+
+def test_exceptions_on_either_side_are_raised_and_leave_the_group_in_step(group):
+    with pytest.raises(ValueError, match="from a worker"):
+        group.map(fail, [("from a worker",), ("from a worker",)], local=lambda: None)
+    with pytest.raises(RuntimeError, match="Unpicklable|does not pickle"):
+        group.map(fail_unpicklably, [()], local=lambda: None)
+
+    def local_fails():
+        raise KeyError("here")
+
+    with pytest.raises(KeyError):
+        group.map(scaled, [(1.0, 5.0), (2.0, 5.0)], local=local_fails)
+    # the replies owed by the failed batches do not answer this one
+    assert group.map(scaled, [(1.0, 7.0), (2.0, 7.0)], local=lambda: 0) == [0, 7.0, 14.0]
+    assert not group.closed
+
+
+def test_an_interrupted_caller_kills_the_group(group):
+    group.map(scaled, [(1.0, 1.0)], local=lambda: None)
+    pids = list(group.pids)
+
+    def interrupted():
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        group.map(scaled, [(1.0, 1.0), (1.0, 1.0)], local=interrupted)
+    assert group.closed
+    deadline = time.time() + 30
+    while any(_alive(p) for p in pids) and time.time() < deadline:
+        time.sleep(0.1)
+    assert not any(_alive(p) for p in pids)
+
+
+def test_close_ends_the_workers(group):
+    group.map(scaled, [(1.0, 1.0), (1.0, 1.0)], local=lambda: None)
+    pids = list(group.pids)
+    group.close()
+    assert not any(_alive(p) for p in pids)
+    with pytest.raises(BrokenProcessPool):
+        group.map(scaled, [(1.0, 1.0)], local=lambda: None)
+
+
+def test_a_dead_worker_breaks_one_batch_and_the_next_starts_afresh():
+    """A worker killed (e.g. by the OOM killer) between two GA generations."""
+    designs = np.array([[5.0, 6.0], [4.0, 7.0], [4.5, 6.5], [5.5, 8.0]])
+    evaluator = DesignEvaluator(MechanismConfig(name="rpr2"), 24, 3)
+    expected = DesignEvaluator(MechanismConfig(name="rpr2"), 24, 1).evaluate(designs)
+    np.testing.assert_array_equal(evaluator.evaluate(designs), expected)
+    group = workers.worker_group(2, preload=("pipeline.objective",))
+    os.kill(group.pids[0], signal.SIGKILL)
+    with pytest.raises(BrokenProcessPool):
+        evaluator.evaluate(designs)
+    assert group.closed
+    np.testing.assert_array_equal(evaluator.evaluate(designs), expected)
+    assert workers.worker_group(2, preload=("pipeline.objective",)) is not group
+
+
+def test_a_worker_that_dies_before_connecting_is_reported():
+    group = workers.WorkerGroup(1, preload=("a_module_that_does_not_exist",))
+    with pytest.raises(ModuleNotFoundError, match="a_module_that_does_not_exist"):
+        group.map(scaled, [(1.0, 1.0)], local=lambda: None)
+    assert group.closed
