@@ -2,10 +2,9 @@
 
 A :class:`WorkerGroup` of ``n`` loky worker processes evaluates ``n`` chunks
 of a batch while the calling process evaluates one more itself: ``n_jobs``
-workers in all, ``n_jobs - 1`` of them extra processes. Each worker runs one
-long task, :func:`_serve`, which connects back to the caller over a Unix
-socket and then runs the ``(function, arguments)`` requests it receives,
-one after the other, until the connection closes.
+workers in all, ``n_jobs - 1`` of them extra processes. Each worker is
+connected to the caller by its own Unix socket, over which it answers the
+``(function, arguments)`` requests it receives, one after the other.
 
 Why not one executor future per chunk (what :mod:`pipeline.objective` did
 before): a future's arguments and result travel through the executor's
@@ -13,21 +12,29 @@ manager and feeder threads, which need the calling process's GIL. While the
 caller evaluates its own chunk they wait for it, and while it waits for its
 futures every hand-over between threads costs a switch. Measured on the
 paper GA's 151 H4 batches (~24 designs, ~23 ms on one core each), on
-2 cores: one future per worker 1.55-1.65x one core; the caller's chunk plus
-one future 1.59x; the caller's chunk plus one request over a socket 1.91x.
+2 cores (``python -m benchmarks.ga --dispatch``, 6 runs): one future per
+worker 1.64-1.77x one core; the caller's chunk plus one future 1.68-1.81x;
+the caller's chunk plus one request over a socket 1.84-1.93x, faster than
+both in every run.
 
-Loky still starts, respawns and ends the processes: its environment for
-workers (one thread per numerical library), its idle timeout, its shutdown.
+Loky still starts and ends the processes, with its environment for workers
+(one thread per numerical library). The serving runs in a daemon thread of
+each worker, started by a short loky task (:func:`_start_server`), so loky
+never has a task running: its own exit hook (which waits for running tasks)
+ends the workers as usual. A worker whose connection closes ends itself, so
+the workers of a run killed by SIGKILL (the OOM killer) exit at once.
 Ctrl-C: the workers start with SIGINT blocked (:func:`submit_masked`); the
 main process alone handles it and kills them (:func:`shutdown_workers`).
 """
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import importlib
 import multiprocessing.resource_tracker
 import os
+import pickle
 import shutil
 import signal
 import socket
@@ -39,6 +46,7 @@ from multiprocessing.connection import Client, Connection
 from typing import TypeVar
 
 from joblib.externals.loky import ProcessPoolExecutor
+from joblib.externals.loky.backend.reduction import dumps as loky_dumps
 from joblib.externals.loky.process_executor import BrokenProcessPool
 
 T = TypeVar("T")
@@ -47,10 +55,6 @@ T = TypeVar("T")
 #: the workers already use every core
 _WORKER_ENV = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
                                       "NUMBA_NUM_THREADS")}
-
-#: seconds after which an idle worker exits (joblib's own default for its loky workers);
-#: without it the workers of a run killed by SIGKILL (the OOM killer) would never exit
-WORKER_IDLE_TIMEOUT = 300
 
 #: whether this platform has Unix sockets (not Windows): without them callers use joblib's dispatch
 AVAILABLE = hasattr(socket, "AF_UNIX")
@@ -109,31 +113,44 @@ def sigint_deferred() -> Iterator[None]:
             signal.raise_signal(signal.SIGINT)
 
 
-def _serve(address: str, preload: tuple[str, ...]) -> None:
-    """A worker's one task: import ``preload``, connect to ``address``, say its pid, then
-    answer each ``(func, args)`` request with ``(True, func(*args))`` or ``(False, exception)``.
+def _start_server(address: str, preload: tuple[str, ...]) -> None:
+    """A worker's one loky task: import ``preload``, connect to ``address`` and say its pid,
+    wait for the word to serve, then serve in a daemon thread (:func:`_serve`) and return.
 
-    Returns when the connection closes: the group was closed, or the calling
-    process ended (even by SIGKILL); the worker is then idle and exits after
-    :data:`WORKER_IDLE_TIMEOUT`.
+    Why the wait: the group sends the word once every worker has connected. A
+    task that returned at once could let one worker take the next worker's
+    task too, and serve two connections while another worker serves none.
     """
     for module in preload:  # the imports (~1.5 s) overlap the caller's work before its first request
         importlib.import_module(module)
+    connection = Client(address, family="AF_UNIX")
+    connection.send(os.getpid())
+    connection.recv()
+    threading.Thread(target=_serve, args=(connection,), name="pm-design-server", daemon=True).start()
+
+
+def _serve(connection: Connection) -> None:
+    """Answer each request (a pickled ``(func, args)``) with ``(True, func(*args))`` or
+    ``(False, exception)``; an exception while unpickling the request is answered too.
+
+    When the connection closes (the group was closed, or the calling process
+    ended, even by SIGKILL) this process has nothing left to do: it exits.
+    """
     try:
-        with Client(address, family="AF_UNIX") as connection:
-            connection.send(os.getpid())
-            while True:
-                func, args = connection.recv()
-                try:
-                    reply = (True, func(*args))
-                except Exception as exc:  # noqa: BLE001 - handed to the caller, which raises it
-                    reply = (False, exc)
-                try:
-                    connection.send(reply)
-                except Exception as exc:  # noqa: BLE001 - e.g. an exception that cannot be pickled
-                    connection.send((False, RuntimeError(f"{type(exc).__name__}: {exc}")))
+        while True:
+            request = connection.recv_bytes()
+            try:
+                func, args = pickle.loads(request)
+                reply = (True, func(*args))
+            except Exception as exc:  # noqa: BLE001 - handed to the caller, which raises it
+                reply = (False, exc)
+            try:
+                connection.send(reply)
+            except Exception as exc:  # noqa: BLE001 - e.g. an exception that cannot be pickled
+                connection.send((False, RuntimeError(f"{type(exc).__name__}: {exc}")))
     except (EOFError, OSError):
-        return
+        pass
+    os._exit(0)
 
 
 class WorkerGroup:
@@ -152,16 +169,16 @@ class WorkerGroup:
 
     def __init__(self, n_workers: int, preload: tuple[str, ...] = ()) -> None:
         # a private directory (mode 0700): no other user can connect to the socket
-        # (short names: a socket's path is limited to ~100 bytes)
+        # (short names: a socket's path is limited to ~100 bytes); removed once all are connected
         self._directory = tempfile.mkdtemp(prefix="pmw-")
         self._address = os.path.join(self._directory, "s")
         self._listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
         self._listener.bind(self._address)
         self._listener.listen(n_workers)
         self._listener.settimeout(_ACCEPT_POLL)
-        self._pool = ProcessPoolExecutor(max_workers=n_workers, env=_WORKER_ENV, timeout=WORKER_IDLE_TIMEOUT)
-        self._servers = submit_masked(self._pool, _serve, [(self._address, preload)] * n_workers)
-        _end_before_loky_at_exit()
+        # no idle timeout: a serving worker has no loky task, and would otherwise be ended while busy
+        self._pool = ProcessPoolExecutor(max_workers=n_workers, env=_WORKER_ENV, timeout=None)
+        self._servers = submit_masked(self._pool, _start_server, [(self._address, preload)] * n_workers)
         self._connections: list[Connection] = []
         #: process ids of the connected workers
         self.pids: list[int] = []
@@ -173,20 +190,28 @@ class WorkerGroup:
         return len(self._servers)
 
     def _connect(self) -> None:
-        """Wait until every worker has connected; BrokenProcessPool if one ended first."""
-        while len(self._connections) < self.n_workers:
+        """Wait until every worker has connected, then tell them to serve; raises what
+        ended a worker that could not connect (loky: BrokenProcessPool if it died)."""
+        if self._connections:
+            return
+        connections = []
+        while len(connections) < self.n_workers:
             try:
                 sock, _ = self._listener.accept()
             except TimeoutError:
                 for server in self._servers:
-                    if server.done():
-                        server.result()  # raises what ended it (loky: BrokenProcessPool if it died)
-                        raise BrokenProcessPool("a worker process ended before connecting")
+                    if server.done() and server.exception() is not None:
+                        raise server.exception()
                 continue
             sock.setblocking(True)
             connection = Connection(sock.detach())
             self.pids.append(connection.recv())
-            self._connections.append(connection)
+            connections.append(connection)
+        self._connections = connections
+        for connection in connections:
+            connection.send("serve")
+        self._listener.close()
+        shutil.rmtree(self._directory, ignore_errors=True)
 
     def map(self, func: Callable[..., T], argument_tuples: list[tuple], local: Callable[[], T]) -> list[T]:
         """``[local(), func(*args_1), func(*args_2), ...]``: each tuple on its own worker, ``local`` here meanwhile.
@@ -197,6 +222,9 @@ class WorkerGroup:
         """
         if len(argument_tuples) > self.n_workers:
             raise ValueError(f"{len(argument_tuples)} requests for {self.n_workers} workers")
+        # pickled first (by loky's pickler, cloudpickle: a lambda works too), so that a
+        # request that cannot be pickled raises here, before anything is sent
+        requests = [bytes(loky_dumps((func, args))) for args in argument_tuples]
         local_error: Exception | None = None
         with self._lock:
             if self.closed:
@@ -204,8 +232,8 @@ class WorkerGroup:
             try:
                 self._connect()
                 busy = self._connections[:len(argument_tuples)]
-                for connection, args in zip(busy, argument_tuples):
-                    connection.send((func, args))
+                for connection, request in zip(busy, requests):
+                    connection.send_bytes(request)
                 try:
                     mine = local()
                 except Exception as exc:  # noqa: BLE001 - raised below, once the replies owed are read
@@ -227,14 +255,15 @@ class WorkerGroup:
         return results
 
     def close(self, kill: bool = False) -> None:
-        """End the workers: at once (``kill``) or once their current request is answered."""
+        """End the workers: killed (``kill``), or through loky's shutdown (call it between batches)."""
         if self.closed:
             return
         self.closed = True
-        for connection in self._connections:
-            connection.close()  # its worker's recv() ends: the task returns
-        self._listener.close()  # workers not yet connected fail to connect, and return
+        self._listener.close()  # workers not yet connected fail to connect: their task ends
+        # loky ends the processes (their serving threads are daemons) ...
         self._pool.shutdown(wait=not kill, kill_workers=kill)
+        for connection in self._connections:  # ... and a worker it has not yet ended exits on the closed connection
+            connection.close()
         shutil.rmtree(self._directory, ignore_errors=True)
 
 
@@ -258,18 +287,4 @@ def shutdown_workers(kill: bool = False) -> None:
         group.close(kill=kill)
 
 
-_registered_at_exit: list[bool] = []
-
-
-def _end_before_loky_at_exit() -> None:
-    """Have :func:`shutdown_workers` run at exit before loky's own exit hook.
-
-    Why: loky's hook (registered when its first executor starts, with
-    ``threading._register_atexit``, so before ``atexit``'s functions) joins its
-    manager threads, which wait for the running tasks: a worker's
-    :func:`_serve` returns only once its connection is closed. Those hooks run
-    last registered first, so this one, registered after loky's, runs first.
-    """
-    if not _registered_at_exit:
-        threading._register_atexit(shutdown_workers)  # noqa: SLF001 - what loky and concurrent.futures use
-        _registered_at_exit.append(True)
+atexit.register(shutdown_workers)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import signal
+import threading
 import time
 
 import numpy as np
@@ -26,6 +27,13 @@ def scaled(values: np.ndarray, factor: float) -> np.ndarray:
 
 def fail(message: str) -> None:
     raise ValueError(message)
+
+
+class FailsToUnpickle:
+    """Pickles, but raises when unpickled (in the worker)."""
+
+    def __reduce__(self):
+        return fail, ("unpickling in the worker",)
 
 
 class Unpicklable(Exception):
@@ -68,6 +76,12 @@ def test_exceptions_on_either_side_are_raised_and_leave_the_group_in_step(group)
         group.map(fail, [("from a worker",), ("from a worker",)], local=lambda: None)
     with pytest.raises(RuntimeError, match="Unpicklable|does not pickle"):
         group.map(fail_unpicklably, [()], local=lambda: None)
+    with pytest.raises(ValueError, match="unpickling in the worker"):
+        group.map(scaled, [(FailsToUnpickle(), 2.0)], local=lambda: None)
+    with pytest.raises(TypeError):  # cannot be pickled here: raised before anything is sent
+        group.map(scaled, [(1.0, 2.0), (lambda: None, threading.Lock())], local=lambda: None)
+    # requests are pickled as loky pickles them: a lambda works
+    assert group.map(lambda x: x + 1, [(1,), (2,)], local=lambda: 0) == [0, 2, 3]
 
     def local_fails():
         raise KeyError("here")
@@ -124,3 +138,31 @@ def test_a_worker_that_dies_before_connecting_is_reported():
     with pytest.raises(ModuleNotFoundError, match="a_module_that_does_not_exist"):
         group.map(scaled, [(1.0, 1.0)], local=lambda: None)
     assert group.closed
+
+
+def test_a_process_with_an_open_group_exits_and_leaves_no_socket_behind(tmp_path):
+    """Loky's exit hook waits for running loky tasks; a serving worker has none, whatever
+    other loky executor started after the group (which re-registers loky's hook last)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = tmp_path / "exits.py"
+    script.write_text(
+        "import numpy as np\n"
+        "from joblib.externals.loky import ProcessPoolExecutor\n"
+        "from pipeline import objective, workers\n"
+        "from pipeline.config import MechanismConfig\n"
+        "designs = np.array([[5.0, 6.0], [4.0, 7.0]])\n"
+        "objective.DesignEvaluator(MechanismConfig(name='rpr2'), 24, 2).evaluate(designs)\n"
+        "pool = ProcessPoolExecutor(max_workers=1)\n"
+        "pool.submit(abs, -1).result()\n"
+        "pool.shutdown()\n"
+        "pool = ProcessPoolExecutor(max_workers=1)\n"
+        "print(pool.submit(abs, -2).result(), flush=True)\n")
+    root = Path(__file__).resolve().parents[1]
+    proc = subprocess.run([sys.executable, str(script)], cwd=root, capture_output=True, text=True, timeout=60,
+                          env={**os.environ, "TMPDIR": str(tmp_path)})
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == ["2"]
+    assert not list(tmp_path.glob("pmw-*"))
