@@ -19,7 +19,7 @@ both in every run.
 
 Loky still starts and ends the processes, with its environment for workers
 (one thread per numerical library). The serving runs in a daemon thread of
-each worker, started by a short loky task (:func:`_start_server`), so loky
+each worker, started by loky's initializer (:func:`_start_server`), so loky
 never has a task running: its own exit hook (which waits for running tasks)
 ends the workers as usual. A worker whose connection closes ends itself, so
 the workers of a run killed by SIGKILL (the OOM killer) exit at once.
@@ -40,6 +40,7 @@ import signal
 import socket
 import tempfile
 import threading
+import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future
 from multiprocessing.connection import Client, Connection
@@ -61,6 +62,8 @@ AVAILABLE = hasattr(socket, "AF_UNIX")
 
 #: seconds between two checks, while waiting for the workers to connect, that none has died
 _ACCEPT_POLL = 0.05
+#: seconds a worker may take to start and connect (~1.5 s here) before the group gives up
+CONNECT_TIMEOUT = 120.0
 
 
 def submit_masked(pool: ProcessPoolExecutor, func: Callable, argument_tuples: list[tuple]) -> list[Future]:
@@ -114,18 +117,16 @@ def sigint_deferred() -> Iterator[None]:
 
 
 def _start_server(address: str, preload: tuple[str, ...]) -> None:
-    """A worker's one loky task: import ``preload``, connect to ``address`` and say its pid,
-    wait for the word to serve, then serve in a daemon thread (:func:`_serve`) and return.
+    """Each worker's loky initializer (run once, as the process starts): import ``preload``,
+    connect to ``address``, say its pid, and serve in a daemon thread (:func:`_serve`).
 
-    Why the wait: the group sends the word once every worker has connected. A
-    task that returned at once could let one worker take the next worker's
-    task too, and serve two connections while another worker serves none.
+    An initializer, not a task: each process runs it exactly once, so every
+    worker has its own connection, and loky never has a task waiting on one.
     """
     for module in preload:  # the imports (~1.5 s) overlap the caller's work before its first request
         importlib.import_module(module)
     connection = Client(address, family="AF_UNIX")
     connection.send(os.getpid())
-    connection.recv()
     threading.Thread(target=_serve, args=(connection,), name="pm-design-server", daemon=True).start()
 
 
@@ -176,42 +177,51 @@ class WorkerGroup:
         self._listener.bind(self._address)
         self._listener.listen(n_workers)
         self._listener.settimeout(_ACCEPT_POLL)
-        # no idle timeout: a serving worker has no loky task, and would otherwise be ended while busy
-        self._pool = ProcessPoolExecutor(max_workers=n_workers, env=_WORKER_ENV, timeout=None)
-        self._servers = submit_masked(self._pool, _start_server, [(self._address, preload)] * n_workers)
         self._connections: list[Connection] = []
         #: process ids of the connected workers
         self.pids: list[int] = []
         self.closed = False
         self._lock = threading.Lock()  # one batch at a time: replies come back in request order
+        self._n_workers = n_workers
+        try:
+            # no idle timeout: a serving worker has no loky task, and would otherwise be ended while busy
+            self._pool = ProcessPoolExecutor(max_workers=n_workers, env=_WORKER_ENV, timeout=None,
+                                             initializer=_start_server, initargs=(self._address, preload))
+            # loky starts every worker at the first submit; a worker whose initializer fails
+            # ends, and these futures then hold BrokenProcessPool
+            self._started = submit_masked(self._pool, int, [()] * n_workers)
+        except BaseException:  # e.g. Ctrl-C, delivered as the signal mask is restored
+            self._pool = None
+            self.close(kill=True)
+            raise
 
     @property
     def n_workers(self) -> int:
-        return len(self._servers)
+        return self._n_workers
 
     def _connect(self) -> None:
-        """Wait until every worker has connected, then tell them to serve; raises what
-        ended a worker that could not connect (loky: BrokenProcessPool if it died)."""
-        if self._connections:
-            return
-        connections = []
-        while len(connections) < self.n_workers:
+        """Wait until every worker has connected; BrokenProcessPool if one ended first
+        or if they have not all connected within :data:`CONNECT_TIMEOUT`."""
+        deadline = time.monotonic() + CONNECT_TIMEOUT
+        while len(self._connections) < self.n_workers:
             try:
                 sock, _ = self._listener.accept()
             except TimeoutError:
-                for server in self._servers:
-                    if server.done() and server.exception() is not None:
-                        raise server.exception()
+                for started in self._started:
+                    if started.done() and started.exception() is not None:
+                        raise started.exception()
+                if time.monotonic() > deadline:
+                    raise BrokenProcessPool(f"{self.n_workers - len(self._connections)} of {self.n_workers} "
+                                            f"worker processes did not connect within {CONNECT_TIMEOUT:g} s")
                 continue
             sock.setblocking(True)
             connection = Connection(sock.detach())
             self.pids.append(connection.recv())
-            connections.append(connection)
-        self._connections = connections
-        for connection in connections:
-            connection.send("serve")
-        self._listener.close()
-        shutil.rmtree(self._directory, ignore_errors=True)
+            self._connections.append(connection)
+        if self._directory is not None:
+            self._listener.close()
+            shutil.rmtree(self._directory, ignore_errors=True)
+            self._directory = None
 
     def map(self, func: Callable[..., T], argument_tuples: list[tuple], local: Callable[[], T]) -> list[T]:
         """``[local(), func(*args_1), func(*args_2), ...]``: each tuple on its own worker, ``local`` here meanwhile.
@@ -259,12 +269,14 @@ class WorkerGroup:
         if self.closed:
             return
         self.closed = True
-        self._listener.close()  # workers not yet connected fail to connect: their task ends
+        self._listener.close()  # a worker not yet connected fails to connect: loky ends it
         # loky ends the processes (their serving threads are daemons) ...
-        self._pool.shutdown(wait=not kill, kill_workers=kill)
+        if self._pool is not None:
+            self._pool.shutdown(wait=not kill, kill_workers=kill)
         for connection in self._connections:  # ... and a worker it has not yet ended exits on the closed connection
             connection.close()
-        shutil.rmtree(self._directory, ignore_errors=True)
+        if self._directory is not None:
+            shutil.rmtree(self._directory, ignore_errors=True)
 
 
 #: this package's worker groups by size (kept apart from joblib's own reusable executor,

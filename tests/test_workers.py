@@ -135,7 +135,17 @@ def test_a_dead_worker_breaks_one_batch_and_the_next_starts_afresh():
 
 def test_a_worker_that_dies_before_connecting_is_reported():
     group = workers.WorkerGroup(1, preload=("a_module_that_does_not_exist",))
-    with pytest.raises(ModuleNotFoundError, match="a_module_that_does_not_exist"):
+    with pytest.raises(BrokenProcessPool):
+        group.map(scaled, [(1.0, 1.0)], local=lambda: None)
+    assert group.closed
+
+
+def test_workers_that_never_connect_are_reported(monkeypatch, tmp_path):
+    (tmp_path / "slow_to_import.py").write_text("import time\ntime.sleep(30)\n")
+    monkeypatch.syspath_prepend(str(tmp_path))  # loky's workers start with this sys.path
+    monkeypatch.setattr(workers, "CONNECT_TIMEOUT", 1.0)
+    group = workers.WorkerGroup(1, preload=("slow_to_import",))
+    with pytest.raises(BrokenProcessPool, match="did not connect within 1 s"):
         group.map(scaled, [(1.0, 1.0)], local=lambda: None)
     assert group.closed
 
@@ -165,4 +175,16 @@ def test_a_process_with_an_open_group_exits_and_leaves_no_socket_behind(tmp_path
                           env={**os.environ, "TMPDIR": str(tmp_path)})
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split() == ["2"]
+    assert not list(tmp_path.glob("pmw-*"))
+    # a group that never served a batch (e.g. the run failed while compiling): exit does not wait for it
+    script.write_text(
+        "import time\n"
+        "from pipeline import workers\n"
+        "group = workers.worker_group(1, preload=('pipeline.objective',))\n"
+        "time.sleep(3)\n"  # the worker has connected by now
+        "print('exiting', flush=True)\n")
+    proc = subprocess.run([sys.executable, str(script)], cwd=root, capture_output=True, text=True, timeout=60,
+                          env={**os.environ, "TMPDIR": str(tmp_path)})
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == ["exiting"]
     assert not list(tmp_path.glob("pmw-*"))
