@@ -12,8 +12,8 @@ manager and feeder threads, which need the calling process's GIL. While the
 caller evaluates its own chunk they wait for it, and while it waits for its
 futures every hand-over between threads costs a switch. Measured on the
 paper GA's 151 H4 batches (~24 designs, ~23 ms on one core each), on
-2 cores (``python -m benchmarks.ga --dispatch``, 6 runs): one future per
-worker 1.64-1.77x one core; the caller's chunk plus one future 1.68-1.81x;
+2 cores (``python -m benchmarks.ga --dispatch``, 9 runs): one future per
+worker 1.64-1.77x one core; the caller's chunk plus one future 1.68-1.83x;
 the caller's chunk plus one request over a socket 1.84-1.93x, faster than
 both in every run.
 
@@ -183,6 +183,7 @@ class WorkerGroup:
         self.closed = False
         self._lock = threading.Lock()  # one batch at a time: replies come back in request order
         self._n_workers = n_workers
+        self._pool: ProcessPoolExecutor | None = None
         try:
             # no idle timeout: a serving worker has no loky task, and would otherwise be ended while busy
             self._pool = ProcessPoolExecutor(max_workers=n_workers, env=_WORKER_ENV, timeout=None,
@@ -190,8 +191,7 @@ class WorkerGroup:
             # loky starts every worker at the first submit; a worker whose initializer fails
             # ends, and these futures then hold BrokenProcessPool
             self._started = submit_masked(self._pool, int, [()] * n_workers)
-        except BaseException:  # e.g. Ctrl-C, delivered as the signal mask is restored
-            self._pool = None
+        except BaseException:  # e.g. Ctrl-C, delivered as the signal mask is restored: end what was started
             self.close(kill=True)
             raise
 

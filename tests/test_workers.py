@@ -188,3 +188,24 @@ def test_a_process_with_an_open_group_exits_and_leaves_no_socket_behind(tmp_path
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split() == ["exiting"]
     assert not list(tmp_path.glob("pmw-*"))
+
+
+def test_ctrl_c_while_the_group_is_made_ends_what_was_started(monkeypatch, tmp_path):
+    """SIGINT pending while the workers start is delivered as the mask is restored, inside
+    the group's construction: the processes and the socket must not outlive it."""
+    started: list = []
+    real = workers.submit_masked
+
+    def interrupted(pool, func, argument_tuples):
+        started.append(pool)
+        real(pool, func, argument_tuples)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(workers, "submit_masked", interrupted)
+    monkeypatch.setattr(workers.tempfile, "tempdir", str(tmp_path))
+    with pytest.raises(KeyboardInterrupt):
+        workers.WorkerGroup(1, preload=("numpy",))
+    pool = started[0]
+    with pytest.raises(RuntimeError):  # shut down
+        pool.submit(int)
+    assert not list(tmp_path.glob("pmw-*"))
