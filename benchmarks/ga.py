@@ -6,7 +6,7 @@ Goals (issue 14): <= 8 s with 2 workers; 2 workers >= 1.8x faster than 1.
 
 ``--dispatch`` also replays the run's batches through three ways of splitting
 a batch over two processes, side by side: one loky future per chunk (what the
-evaluator did before ``pipeline/workers.py``), the caller's chunk plus one
+evaluator did before ``pipeline/evaluation/workers.py``), the caller's chunk plus one
 loky future, and the caller's chunk plus one request to a worker group (what
 it does now).
 """
@@ -20,10 +20,12 @@ import numpy as np
 from joblib.externals.loky import ProcessPoolExecutor
 
 from pipeline.config import MechanismConfig
-from pipeline.objective import DesignEvaluator, MechanismSpec, _evaluate_chunk, objective_values
+from pipeline.evaluation import DesignEvaluator, MechanismSpec
+from pipeline.evaluation.evaluator import _evaluate_chunk
+from pipeline.objectives import objective_values
 from pipeline.optimizers.base import Problem
 from pipeline.optimizers.ga import genetic_algorithm
-from pipeline.workers import WorkerGroup
+from pipeline.evaluation.workers import WorkerGroup
 
 
 def run(n_jobs: int, w_d: float, seed: int, batches: list[np.ndarray]):
@@ -56,7 +58,7 @@ def dispatch_comparison(batches: list[np.ndarray]) -> None:
 
     futures_pool = ProcessPoolExecutor(max_workers=2)
     caller_pool = ProcessPoolExecutor(max_workers=1)
-    group = WorkerGroup(1, preload=("pipeline.objective",))
+    group = WorkerGroup(1, preload=("pipeline.evaluation",))
 
     def futures_per_chunk():
         for batch in batches:

@@ -28,13 +28,14 @@ import numpy as np
 from hydra import compose, initialize_config_dir
 
 from pipeline.config import CONFIG_DIR, MechanismConfig, register_configs
-from pipeline.objective import DesignEvaluator, objective_values
+from pipeline.evaluation import DesignEvaluator
+from pipeline.objectives import objective_values
 from pipeline.optimizers.base import Problem
 from pipeline.optimizers.cmaes import CMAES, CMAESConfig
 from pipeline.optimizers.de import DE, DEConfig
 from pipeline.optimizers.ga import GA, GAConfig
 from pipeline.optimizers.polish import polish
-from pipeline.run import run_study
+from pipeline.study import run_study
 
 PROBLEMS = {
     "H4 mixed (w_d = 0.5)": ("h4", "mixed", 0.5),

@@ -140,7 +140,7 @@ def main_job_times(scratch: Path) -> dict[str, float]:
     """The main job cold (empty caches: stages and numba) and warm, each in a fresh process.
 
     Cold twice, side by side: as shipped (the entry point compiles the kernels ahead in a second
-    process, :mod:`pipeline.compile_ahead`) and with that helper off (``PM_DESIGN_COMPILE_AHEAD=0``).
+    process, :mod:`pipeline.evaluation.compile_ahead`) and with that helper off (``PM_DESIGN_COMPILE_AHEAD=0``).
     """
     times = {}
     for label, ahead in (("cold_without_helper", "0"), ("cold", "1")):

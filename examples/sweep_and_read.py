@@ -25,7 +25,7 @@ subprocess.run([sys.executable, "-m", "pipeline", "-m", "+experiment=rpr2_mixed"
                 f"paths.output_dir={out}"], check=True)
 
 # %%
-import pipeline.plot  # noqa: E402,F401  (the package is importable in a notebook without side effects)
+import pipeline.stages.plot  # noqa: E402,F401  (the package is importable in a notebook without side effects)
 
 assert plt.get_backend() == backend_before, "importing pipeline changed matplotlib's backend"
 best = pd.read_parquet(out / "dataset" / "best")

@@ -8,6 +8,9 @@ or 1 (a run that failed at run time).
 from __future__ import annotations
 
 import math
+import os
+import tempfile
+from pathlib import Path
 
 
 class ConfigError(ValueError):
@@ -27,3 +30,30 @@ def check(field: str, value: object, ok: bool, allowed: str) -> None:
 def finite(value: object) -> bool:
     """True for a finite real number (bools are not numbers here)."""
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def check_writable(field_name: str, path: str | os.PathLike) -> Path:
+    """``path`` is (or can be created as) a writable directory.
+
+    Nothing is left behind: the nearest existing directory is probed with an
+    anonymous temporary file (a permission check alone is not enough: root
+    passes it on read-only or pseudo file systems).
+    """
+    p = Path(path).expanduser()
+    probe = p
+    while not probe.exists() and not probe.is_symlink():
+        if probe.parent == probe:
+            break
+        probe = probe.parent
+    if not probe.is_dir():
+        raise ConfigError(f"{field_name}={str(path)!r} is invalid: {probe} is not a directory; "
+                          f"allowed: a writable directory")
+    try:
+        with tempfile.TemporaryFile(dir=probe):
+            pass
+    except OSError as exc:
+        raise ConfigError(f"{field_name}={str(path)!r} is invalid: {probe} is not writable "
+                          f"({exc.strerror or exc}); allowed: a writable directory") from None
+    return p
+
+

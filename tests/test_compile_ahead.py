@@ -1,4 +1,4 @@
-"""The entry point's compile-ahead helper (pipeline.compile_ahead): it compiles, it is skipped
+"""The entry point's compile-ahead helper (pipeline.evaluation.compile_ahead): it compiles, it is skipped
 once the cache is warm, and a run that used it gives the same results as one that did not."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
-from pipeline import compile_ahead
+from pipeline.evaluation import compile_ahead
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY_H4 = ["+experiment=h4_mixed", "+debug=fast", "optimizer.population=4", "optimizer.generations=2",

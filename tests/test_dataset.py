@@ -13,11 +13,12 @@ import pyarrow.parquet as pq
 import pytest
 from hydra import compose, initialize_config_dir
 
-import pipeline.aggregate as aggregate_module
-from pipeline.aggregate import aggregate
-from pipeline.config import CONFIG_DIR, launch_id, register_configs
+import pipeline.stages.aggregate as aggregate_module
+from pipeline.stages.aggregate import aggregate
+from pipeline.config import CONFIG_DIR, register_configs
+from pipeline.store.runs import launch_id
 from pipeline.errors import RunError
-from pipeline.run import run_study
+from pipeline.study import run_study
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = ["+debug=fast", "optimizer.population=4", "optimizer.generations=2"]

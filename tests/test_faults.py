@@ -215,7 +215,7 @@ def test_aggregate_cli_refusals(args, pattern, code, existing_run, tmp_path):
     foreign.mkdir()
     (foreign / "notes.txt").write_text("mine")
     values = {"missing": tmp_path / "nope", "run": existing_run, "file": file, "foreign": foreign}
-    proc = run_cli([a.format(**values) for a in args], tmp_path, module="pipeline.aggregate")
+    proc = run_cli([a.format(**values) for a in args], tmp_path, module="pipeline.stages.aggregate")
     assert proc.returncode == code
     assert_one_error_line(proc, pattern)
     assert file.read_text() == "x" and [p.name for p in foreign.iterdir()] == ["notes.txt"]
@@ -323,7 +323,7 @@ def test_disk_full_marks_no_run_complete(monkeypatch, tmp_path, capsys):
 
 
 def test_a_job_failing_at_run_time_does_not_lose_the_sweep(monkeypatch, tmp_path, capsys):
-    import pipeline.run as run_module
+    import pipeline.study as run_module
 
     real = run_module.optimise_design
 
@@ -357,7 +357,7 @@ def test_workers_never_see_ctrl_c(tmp_path):
     script = tmp_path / "masks.py"
     script.write_text(
         "import signal, numpy as np\n"
-        "from pipeline import objective, workers\n"
+        "from pipeline import evaluation as objective\nfrom pipeline.evaluation import workers\n"
         "from pipeline.config import MechanismConfig\n"
         "designs = np.array([[5.0, 6.0], [4.0, 7.0], [4.5, 6.5]])\n"
         "objective.DesignEvaluator(MechanismConfig(name='rpr2'), 40, 3).evaluate(designs)\n"
@@ -377,7 +377,7 @@ def test_ctrl_c_during_kernel_compilation_is_deferred_not_lost(tmp_path):
     script = tmp_path / "deferred.py"
     script.write_text(
         "import os, signal, time\n"
-        "from pipeline.workers import sigint_deferred\n"
+        "from pipeline.evaluation.workers import sigint_deferred\n"
         "try:\n"
         "    with sigint_deferred():\n"
         "        os.kill(os.getpid(), signal.SIGINT)\n"
@@ -400,7 +400,7 @@ def test_workers_of_a_killed_run_exit(tmp_path):
     script = tmp_path / "killed.py"
     script.write_text(
         "import os, numpy as np\n"
-        "from pipeline import objective, workers\n"
+        "from pipeline import evaluation as objective\nfrom pipeline.evaluation import workers\n"
         "from pipeline.config import MechanismConfig\n"
         "designs = np.array([[5.0, 6.0], [4.0, 7.0], [4.5, 6.5]])\n"
         "objective.DesignEvaluator(MechanismConfig(name='rpr2'), 40, 3).evaluate(designs)\n"

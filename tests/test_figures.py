@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import pipeline.plot as plot_module
+import pipeline.stages.plot as plot_module
 from kinematics import MECHANISMS
 from pipeline.config import MechanismConfig
 
@@ -106,8 +106,8 @@ def test_vector_format_beside_the_png(tmp_path):
 
 
 def test_importing_the_package_keeps_the_matplotlib_backend():
-    code = ("import matplotlib; matplotlib.use('svg'); import pipeline.plot, pipeline.run, pipeline.report, "
-            "pipeline.reproduce; import matplotlib.pyplot as plt; print(plt.get_backend())")
+    code = ("import matplotlib; matplotlib.use('svg'); import pipeline.stages.plot, pipeline.study, pipeline.report, "
+            "pipeline.reproduction; import matplotlib.pyplot as plt; print(plt.get_backend())")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip().lower() == "svg"

@@ -11,7 +11,8 @@ from scipy import stats
 
 from pipeline.config import MechanismConfig
 from pipeline.errors import ConfigError
-from pipeline.objective import OBJECTIVES, DesignEvaluator, objective_values
+from pipeline.evaluation import DesignEvaluator
+from pipeline.objectives import OBJECTIVES, objective_values
 from pipeline.optimizers.de import DE, DEConfig
 from pipeline.optimizers.base import Problem
 from pipeline.optimizers.ga import (

@@ -7,13 +7,14 @@ import pytest
 
 from pipeline.config import MechanismConfig
 from pipeline.errors import ConfigError
-from pipeline.objective import DesignEvaluator, objective_values
+from pipeline.evaluation import DesignEvaluator
+from pipeline.objectives import objective_values
 from pipeline.optimizers import OPTIMIZERS, Optimizer, OptimizerConfig
 from pipeline.optimizers.base import Problem
 from pipeline.optimizers.cmaes import CMAES, CMAESConfig
 from pipeline.optimizers.nsga2 import NSGA2, NSGA2Config
 from pipeline.optimizers.polish import polish
-from pipeline.sensitivity import flat_intervals
+from pipeline.optimizers.sensitivity import flat_intervals
 
 LOWER = np.array([0.0, -1.0, 2.0])
 UPPER = np.array([1.0, 1.0, 5.0])

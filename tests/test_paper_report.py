@@ -12,9 +12,9 @@ import pytest
 from hydra import compose, initialize_config_dir
 
 from pipeline.config import CONFIG_DIR, register_configs
-from pipeline.paper_report import compare
-from pipeline.papers import load_paper, paper_names
-from pipeline.readings import H4_PAPER
+from pipeline.reproduction.paper_report import compare
+from pipeline.reproduction.papers import load_paper, paper_names
+from pipeline.reproduction.readings import H4_PAPER
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -66,7 +66,7 @@ def test_table3_multirun_then_report(tmp_path):
     best = pd.read_parquet(out / "dataset" / "best")
     assert sorted(zip(best["w_d"], best["seed"])) == [(w, s) for w in (0.25, 0.5, 0.75) for s in (0, 1, 2)]
     report_file = tmp_path / "table3.md"
-    proc = subprocess.run([sys.executable, "-m", "pipeline.paper_report", str(out / "dataset"), "--paper",
+    proc = subprocess.run([sys.executable, "-m", "pipeline.reproduction.paper_report", str(out / "dataset"), "--paper",
                            "seed000_h4", "--out", str(report_file)], cwd=ROOT, capture_output=True, text=True,
                           timeout=120)
     assert proc.returncode == 0, proc.stderr
@@ -85,7 +85,7 @@ def test_report_refusals_are_one_line(args, field, tmp_path):
     dataset = tmp_path / "dataset"
     (dataset / "best").mkdir(parents=True)
     values = {"dataset": dataset, "missing": tmp_path / "nope"}
-    proc = subprocess.run([sys.executable, "-m", "pipeline.paper_report", *[a.format(**values) for a in args]],
+    proc = subprocess.run([sys.executable, "-m", "pipeline.reproduction.paper_report", *[a.format(**values) for a in args]],
                           cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     lines = proc.stderr.strip().splitlines()

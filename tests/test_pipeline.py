@@ -14,16 +14,16 @@ import pytest
 from hydra import compose, initialize_config_dir
 from omegaconf import OmegaConf
 
-from pipeline.aggregate import aggregate
-from pipeline.aggregate import main as aggregate_main
-from pipeline.cache import cached
+from pipeline.stages.aggregate import aggregate
+from pipeline.stages.aggregate import main as aggregate_main
+from pipeline.store.cache import cached
 from pipeline.config import CONFIG_DIR, Config, register_configs, validate
 from pipeline.errors import ConfigError
-from pipeline.evaluate import evaluate_designs
-from pipeline.io import read_metadata
-from pipeline.optimise import optimise_design
-from pipeline.run import run_study
-from pipeline.sample import sample_designs
+from pipeline.stages.evaluate import evaluate_designs
+from pipeline.store.parquet import read_metadata
+from pipeline.stages.optimise import optimise_design
+from pipeline.study import run_study
+from pipeline.stages.sample import sample_designs
 
 ROOT = Path(__file__).resolve().parents[1]
 CONF = CONFIG_DIR
@@ -138,9 +138,10 @@ def test_cache_hits_checked_with_joblibs_api(tmp_path):
 
 
 def test_cache_key_covers_every_source_file():
-    from pipeline import cache
+    import pipeline
+    from pipeline.store import cache
 
-    files = {p.name for p in Path(cache.__file__).parent.rglob("*.py")}
+    files = {p.name for p in Path(pipeline.__file__).parent.rglob("*.py")}
     assert {"plot.py", "ga.py", "cmaes.py", "aggregate.py"} <= files  # no hand-kept list
     assert cache.CODE_VERSION.split("+")[1] == cache._source_digest()
 

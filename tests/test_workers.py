@@ -1,4 +1,4 @@
-"""The worker group behind the parallel batch evaluation (``pipeline.workers``).
+"""The worker group behind the parallel batch evaluation (``pipeline.evaluation.workers``).
 
 Its requests travel over one socket per worker, so the cases that matter are
 the ones where the two ends could fall out of step: an exception on either
@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 from joblib.externals.loky.process_executor import BrokenProcessPool
 
-from pipeline import workers
+from pipeline.evaluation import workers
 from pipeline.config import MechanismConfig
-from pipeline.objective import DesignEvaluator
+from pipeline.evaluation import DesignEvaluator
 
 
 def scaled(values: np.ndarray, factor: float) -> np.ndarray:
@@ -124,13 +124,13 @@ def test_a_dead_worker_breaks_one_batch_and_the_next_starts_afresh():
     evaluator = DesignEvaluator(MechanismConfig(name="rpr2"), 24, 3)
     expected = DesignEvaluator(MechanismConfig(name="rpr2"), 24, 1).evaluate(designs)
     np.testing.assert_array_equal(evaluator.evaluate(designs), expected)
-    group = workers.worker_group(2, preload=("pipeline.objective",))
+    group = workers.worker_group(2, preload=("pipeline.evaluation.evaluator",))
     os.kill(group.pids[0], signal.SIGKILL)
     with pytest.raises(BrokenProcessPool):
         evaluator.evaluate(designs)
     assert group.closed
     np.testing.assert_array_equal(evaluator.evaluate(designs), expected)
-    assert workers.worker_group(2, preload=("pipeline.objective",)) is not group
+    assert workers.worker_group(2, preload=("pipeline.evaluation.evaluator",)) is not group
 
 
 def test_a_worker_that_dies_before_connecting_is_reported():
@@ -161,7 +161,7 @@ def test_a_process_with_an_open_group_exits_and_leaves_no_socket_behind(tmp_path
     script.write_text(
         "import numpy as np\n"
         "from joblib.externals.loky import ProcessPoolExecutor\n"
-        "from pipeline import objective, workers\n"
+        "from pipeline import evaluation as objective\nfrom pipeline.evaluation import workers\n"
         "from pipeline.config import MechanismConfig\n"
         "designs = np.array([[5.0, 6.0], [4.0, 7.0]])\n"
         "objective.DesignEvaluator(MechanismConfig(name='rpr2'), 24, 2).evaluate(designs)\n"
@@ -179,8 +179,8 @@ def test_a_process_with_an_open_group_exits_and_leaves_no_socket_behind(tmp_path
     # a group that never served a batch (e.g. the run failed while compiling): exit does not wait for it
     script.write_text(
         "import time\n"
-        "from pipeline import workers\n"
-        "group = workers.worker_group(1, preload=('pipeline.objective',))\n"
+        "from pipeline.evaluation import workers\n"
+        "group = workers.worker_group(1, preload=('pipeline.evaluation.evaluator',))\n"
         "time.sleep(3)\n"  # the worker has connected by now
         "print('exiting', flush=True)\n")
     proc = subprocess.run([sys.executable, str(script)], cwd=root, capture_output=True, text=True, timeout=60,

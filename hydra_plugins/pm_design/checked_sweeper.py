@@ -1,7 +1,18 @@
-"""Hydra's plugin name for :class:`pipeline.sweeper.CheckedSweeper` (the logic lives there)."""
+"""Hydra's plugin module for the project's sweeper (the logic lives in :mod:`pipeline.sweeps`).
 
-from pipeline.sweeper import CheckedSweeper as _CheckedSweeper
+Hydra imports every module under ``hydra_plugins`` when it scans for plugins
+and registers the plugin classes defined in them; importing this one also
+stores the sweeper's config node (``hydra/sweeper=checked``) in the ConfigStore.
+"""
+
+from hydra.core.config_store import ConfigStore
+
+from pipeline.sweeps import sweeper
 
 
-class CheckedSweeper(_CheckedSweeper):
-    """See :mod:`pipeline.sweeper`."""
+class CheckedSweeper(sweeper.CheckedSweeper):
+    """See :mod:`pipeline.sweeps.sweeper`."""
+
+
+ConfigStore.instance().store(group="hydra/sweeper", name="checked", node=sweeper.CheckedSweeperConf,
+                             provider="pm-design")

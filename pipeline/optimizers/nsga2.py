@@ -18,13 +18,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pipeline.errors import check, finite
-from pipeline.objective import OBJECTIVES
+from pipeline.objectives import OBJECTIVES
 from pipeline.optimizers.base import check_generations, History, OptimizationResult, Optimizer, OptimizerConfig, Problem
 
 
 @dataclass
 class NSGA2Config(OptimizerConfig):
-    """NSGA-II settings; ``objectives`` names two of :data:`pipeline.objective.OBJECTIVES`."""
+    """NSGA-II settings; ``objectives`` names two of :data:`pipeline.objectives.OBJECTIVES`."""
 
     name: str = "nsga2"
     polish: bool = False

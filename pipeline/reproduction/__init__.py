@@ -5,7 +5,7 @@
 (seed 004), :mod:`.delta` (a published Delta result) and :mod:`.extensions`. Each paper table or figure is an
 experiment that declares its own sweep; :class:`.driver.Reproduction` runs
 those sweeps into one dataset, and the sections read it back. Driven by
-``python -m pipeline.reproduce``.
+``python -m pipeline.reproduction``.
 """
 
 from __future__ import annotations

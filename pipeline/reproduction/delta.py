@@ -20,7 +20,7 @@ from kinematics import get_mechanism
 from kinematics.delta import Delta
 from kinematics.workspace import evaluate
 from pipeline.reproduction.driver import Reproduction
-from pipeline.tables import rel, table
+from pipeline.report.tables import rel, table
 
 #: Briot et al. 2008, as printed (m, deg, m³): base and platform radii Rb, Rp, the arm Lb (base
 #: side) and the parallelogram Lp (platform side), the actuator range θ_i ∈ [0°, 90°], the

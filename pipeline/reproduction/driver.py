@@ -1,6 +1,6 @@
 """The document's driver: runs the experiments' declared sweeps into one dataset and collects sections.
 
-Each paper table or figure is an experiment (``pipeline/conf/experiment/*.yaml``)
+Each paper table or figure is an experiment (``conf/experiment/*.yaml``)
 that declares its own sweep in ``hydra.sweeper.params``, the same sweep
 ``python -m pipeline -m +experiment=NAME`` runs. :meth:`Reproduction.experiment`
 expands that sweep the way Hydra's basic sweeper does, runs the jobs through
@@ -27,10 +27,11 @@ from hydra.core.override_parser.overrides_parser import OverridesParser
 from joblib import Parallel, delayed
 from omegaconf import DictConfig, OmegaConf, open_dict
 
-from pipeline.aggregate import aggregate
-from pipeline.cache import cached
-from pipeline.config import CONFIG_DIR, launch_id, register_configs
-from pipeline.run import read_manifest, run_study
+from pipeline.stages.aggregate import aggregate
+from pipeline.store.cache import cached
+from pipeline.config import CONFIG_DIR, register_configs
+from pipeline.store.runs import launch_id, read_manifest
+from pipeline.study import run_study
 
 #: studies run side by side (each with one fitness worker): the machine's 2 cores
 STUDY_JOBS = 2

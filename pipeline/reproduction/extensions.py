@@ -14,7 +14,7 @@ import pandas as pd
 from kinematics import get_mechanism
 from kinematics.workspace import evaluate
 from pipeline.reproduction.driver import Reproduction
-from pipeline.tables import table
+from pipeline.report.tables import table
 
 
 def extensions(r: Reproduction, h4_sweep_table: pd.DataFrame, best_runs: dict[str, pd.Series]) -> None:

@@ -2,7 +2,7 @@
 
 Experiments: ``h4_table1``, ``h4_table2``, ``h4_table3`` (the paper GA over
 seeds 0-2) and ``h4_fig8`` (w_d = 0, 0.05, ..., 1). The paper's numbers come
-from ``pipeline/papers/seed000_h4.yaml``.
+from ``pipeline/reproduction/papers/seed000_h4.yaml``.
 """
 
 from __future__ import annotations
@@ -17,10 +17,10 @@ import pandas as pd
 
 from kinematics import MECHANISMS, get_mechanism
 from kinematics.workspace import evaluate
-from pipeline.plot import plot_convergence, plot_workspace
-from pipeline.readings import H4_PAPER
+from pipeline.stages.plot import plot_convergence, plot_workspace
+from pipeline.reproduction.readings import H4_PAPER
 from pipeline.reproduction.driver import Reproduction
-from pipeline.tables import rel, table
+from pipeline.report.tables import rel, table
 
 #: the experiments of Tables 1-3 (h4_table3 sweeps w_d as well as the seeds)
 TABLE_EXPERIMENTS = ("h4_table1", "h4_table2", "h4_table3")
@@ -175,7 +175,7 @@ does not depend on the scale of the platform.
 
 def workspace_pngs(d: float, h: float, Qz: float) -> dict[str, bytes]:
     """Fig. 5-6 of the H4 design (d, h, Qz in cm): its workspace slice at θ = 0 and 1/κ on it, as PNG
-    bytes (:func:`pipeline.plot.plot_workspace`, 1/κ > 0.01)."""
+    bytes (:func:`pipeline.stages.plot.plot_workspace`, 1/κ > 0.01)."""
     mech = get_mechanism("h4", d=d, h=h, Qz=Qz)
     with tempfile.TemporaryDirectory() as tmp:
         plot_workspace(mech, mech.default_orientation, 0.01, None, Path(tmp), "H4 max V")

@@ -11,7 +11,7 @@ import numpy as np
 from kinematics import get_mechanism
 from kinematics.workspace import evaluate
 from pipeline.reproduction.driver import Reproduction
-from pipeline.tables import rel, table
+from pipeline.report.tables import rel, table
 
 
 def rpr2(r: Reproduction) -> None:

@@ -13,7 +13,7 @@ import numpy as np
 from kinematics import get_mechanism
 from kinematics.workspace import evaluate
 from pipeline.reproduction.driver import Reproduction
-from pipeline.tables import rel, table
+from pipeline.report.tables import rel, table
 
 SEEDS = (0, 1, 2)
 #: the thesis' example geometry (mm): base and platform points, leg range

@@ -1,7 +1,7 @@
 """Seed 001, the Tricept: Table 2 and Fig. 3-4 (sections of ``docs/reproduction.md``).
 
 Experiment: ``tricept_table2`` (the GA over seeds 0-1). The paper's numbers come from
-``pipeline/papers/seed001_tricept.yaml``.
+``pipeline/reproduction/papers/seed001_tricept.yaml``.
 """
 
 from __future__ import annotations
@@ -13,10 +13,10 @@ import numpy as np
 
 from kinematics import get_mechanism
 from kinematics.workspace import evaluate
-from pipeline.readings import TRICEPT_PAPER
+from pipeline.reproduction.readings import TRICEPT_PAPER
 from pipeline.reproduction.driver import Reproduction
 from pipeline.reproduction.h4 import bound_positions
-from pipeline.tables import rel, table
+from pipeline.report.tables import rel, table
 
 
 

@@ -6,7 +6,7 @@ workers in all, ``n_jobs - 1`` of them extra processes. Each worker is
 connected to the caller by its own Unix socket, over which it answers the
 ``(function, arguments)`` requests it receives, one after the other.
 
-Why not one executor future per chunk (what :mod:`pipeline.objective` did
+Why not one executor future per chunk (what :mod:`pipeline.evaluation` did
 before): a future's arguments and result travel through the executor's
 manager and feeder threads, which need the calling process's GIL. While the
 caller evaluates its own chunk they wait for it, and while it waits for its

@@ -32,10 +32,10 @@ except PackageNotFoundError:  # a source tree that was not installed
 #: modules (and folders of modules) that write documents and pages from results, which no cached
 #: stage runs: editing their prose must not throw away hours of cached studies. Everything else is
 #: in the key.
-DOCUMENT_WRITERS = ("pipeline/reproduce.py", "pipeline/report.py", "pipeline/paper_report.py",
+DOCUMENT_WRITERS = ("pipeline/reproduction/__main__.py", "pipeline/report/html.py", "pipeline/reproduction/paper_report.py",
                     "pipeline/reproduction/")
 #: data files the cached computations read (the papers' numbers score the readings study)
-DATA_FILES = ("pipeline/papers/*.yaml",)
+DATA_FILES = ("pipeline/reproduction/papers/*.yaml",)
 
 
 def _source_digest() -> str:

@@ -13,9 +13,9 @@ open is a constructor parameter (a *reading*, see the module docstrings of
    correlation over 64 Sobol designs, and the GDI of the max-V optimum
    against the max-GDI optimum), and, for H4, where a w_d sweep collapses
    the workspace;
-3. returns the Markdown section that :mod:`pipeline.reproduce` puts into
+3. returns the Markdown section that :mod:`pipeline.reproduction` puts into
    ``docs/reproduction.md``, naming the best reading and the
-   ``+reading=...`` preset (``pipeline/conf/reading/``) that selects it.
+   ``+reading=...`` preset (``conf/reading/``) that selects it.
 
 Paper numbers are data (:data:`H4_PAPER`, :data:`TRICEPT_PAPER`).
 """
@@ -34,21 +34,22 @@ from scipy.stats import spearmanr
 
 from kinematics import get_mechanism
 from kinematics.workspace import evaluate
-from pipeline.cache import cached
+from pipeline.store.cache import cached
 from pipeline.config import CONFIG_DIR, MechanismConfig, SampleConfig
-from pipeline.objective import DesignEvaluator, objective_values
+from pipeline.evaluation import DesignEvaluator
+from pipeline.objectives import objective_values
 from pipeline.optimizers import reference_optimum
 from pipeline.optimizers.base import Problem
-from pipeline.papers import load_paper
-from pipeline.sample import sample_designs
+from pipeline.reproduction.papers import load_paper
+from pipeline.stages.sample import sample_designs
 
-#: seed 000 Tables 1-3: V (cm³ as printed), GDI, and the design (cm), from pipeline/papers/seed000_h4.yaml
+#: seed 000 Tables 1-3: V (cm³ as printed), GDI, and the design (cm), from pipeline/reproduction/papers/seed000_h4.yaml
 H4_PAPER = {row["table"]: {k: row[k] for k in ("V", "gdi", "d", "h", "Qz")}
             for row in load_paper("seed000_h4")["rows"]}
 #: Table 2's V = 4.1887 is 4π/3 to five digits: a floor of the paper's volume routine, not a volume
 H4_DEGENERATE_V = ("Table 2 (max GDI)",)
 #: seed 001 Table 2: V (mm·rad²), the LCI range and the design (a and b swapped back into their bounds),
-#: from pipeline/papers/seed001_tricept.yaml
+#: from pipeline/reproduction/papers/seed001_tricept.yaml
 TRICEPT_PAPER = {k: v for k, v in load_paper("seed001_tricept")["rows"][0].items()
                  if k in ("V", "lci_min", "lci_max", "a", "b", "d")}
 
@@ -162,7 +163,7 @@ def check_reading(reading: Reading, paper_designs: dict[str, np.ndarray], cache_
 
 
 def reading_preset(reading: Reading) -> str | None:
-    """Name of the ``pipeline/conf/reading/`` preset that selects exactly this reading, if any."""
+    """Name of the ``conf/reading/`` preset that selects exactly this reading, if any."""
     for path in sorted((CONFIG_DIR / "reading").glob("*.yaml")):
         data = yaml.safe_load(path.read_text()) or {}
         mech = data.get("mechanism", {})

@@ -19,8 +19,8 @@ Guarantees (tested in ``tests/test_dataset.py``):
   the new runs) and swapped in by renaming; on any error the previous
   dataset is left as it was. An exclusive lock serialises aggregations.
 
-Run on its own: ``python -m pipeline.aggregate <dir> [<dir> ...] [--dataset DIR]``;
-a multirun aggregates its sweep at its end (:mod:`pipeline.sweeper`).
+Run on its own: ``python -m pipeline.stages.aggregate <dir> [<dir> ...] [--dataset DIR]``;
+a multirun aggregates its sweep at its end (:mod:`pipeline.sweeps.sweeper`).
 """
 
 from __future__ import annotations
@@ -42,8 +42,8 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from pipeline.errors import ConfigError, RunError
-from pipeline.io import column_unit, to_table, write_table
-from pipeline.run import MANIFEST, TABLES, read_manifest
+from pipeline.store.parquet import column_unit, to_table, write_table
+from pipeline.store.runs import MANIFEST, TABLES, read_manifest
 
 log = logging.getLogger(__name__)
 
@@ -171,7 +171,7 @@ def aggregate(sources: Path | list[Path], dataset_dir: Path) -> AggregateReport:
     for source in sources:
         if not source.is_dir():
             raise ConfigError(f"source={str(source)!r} is invalid: allowed an existing run, sweep or parent directory")
-    from pipeline.config import check_writable
+    from pipeline.errors import check_writable
 
     check_writable("--dataset", dataset_dir)
     if dataset_dir.exists() and any(dataset_dir.iterdir()) and not (dataset_dir / "runs").is_dir():
@@ -246,7 +246,7 @@ def _with_field_metadata(schema: pa.Schema, sources: list[pa.Schema]) -> pa.Sche
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m pipeline.aggregate",
+    parser = argparse.ArgumentParser(prog="python -m pipeline.stages.aggregate",
                                      description=__doc__.split("\n")[0])
     parser.add_argument("sources", type=Path, nargs="+", help="run, sweep or parent directories")
     parser.add_argument("--dataset", type=Path, default=Path("outputs/dataset"),

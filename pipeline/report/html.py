@@ -26,8 +26,8 @@ import numpy as np
 import pandas as pd
 
 from pipeline.errors import ConfigError
-from pipeline.plot import _figure, plot_tradeoff, symbol
-from pipeline.run import MANIFEST, read_manifest
+from pipeline.stages.plot import _figure, plot_tradeoff, symbol
+from pipeline.store.runs import MANIFEST, read_manifest
 
 #: columns of the optima table, in order (those present are shown)
 TABLE_COLUMNS = ("job", "mechanism", "objective", "w_d", "optimizer", "seed", "objective_value", "objective_unit",
@@ -177,7 +177,7 @@ console.log("pm-design report ready: " + document.querySelectorAll("#optima tbod
 
 def write_report(source: Path, out: Path | None = None) -> Path:
     """Write ``report.html`` (default: inside ``source``) atomically; returns its path."""
-    from pipeline.io import write_text
+    from pipeline.store.parquet import write_text
 
     out = Path(out) if out is not None else Path(source) / "report.html"
     return write_text(out, build_report(source))
@@ -199,6 +199,3 @@ def main(argv: list[str] | None = None) -> int:
     print(json.dumps({"report": str(path)}))
     return 0
 
-
-if __name__ == "__main__":
-    sys.exit(main())

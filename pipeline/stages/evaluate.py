@@ -10,7 +10,8 @@ import logging
 import pandas as pd
 
 from pipeline.config import MechanismConfig
-from pipeline.objective import EVALUATION_FIELDS, DesignEvaluator
+from pipeline.evaluation import DesignEvaluator
+from pipeline.objectives import EVALUATION_FIELDS
 
 log = logging.getLogger(__name__)
 
@@ -34,7 +35,7 @@ def evaluate_designs(mechanism: MechanismConfig, resolution: int | None, designs
     Returns
     -------
     pandas.DataFrame
-        ``design_id``, the design variables, then :data:`~pipeline.objective.EVALUATION_FIELDS`
+        ``design_id``, the design variables, then :data:`~pipeline.objectives.EVALUATION_FIELDS`
         (volume in the mechanism's volume unit, gdi, suri, ...; ``valid`` bool).
     """
     log.debug("evaluate: %d designs of %s with %d workers", len(designs), mechanism.name, n_jobs)

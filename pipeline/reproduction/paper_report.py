@@ -1,9 +1,9 @@
 """Report step: a dataset's optima beside a paper's printed tables.
 
-``python -m pipeline.paper_report DATASET --paper seed000_h4 [--out FILE.md]``
+``python -m pipeline.reproduction.paper_report DATASET --paper seed000_h4 [--out FILE.md]``
 reads the dataset the way users do (``pd.read_parquet(DATASET / "best")``),
 keeps the runs of the paper's mechanism, and for each printed table row
-(:mod:`pipeline.papers`) the runs of the same objective (and ``w_d`` for the
+(:mod:`pipeline.reproduction.papers`) the runs of the same objective (and ``w_d`` for the
 mixed index), one line per optimiser: how many runs, and for V, GDI and each
 design variable the paper's number, ours as mean ± standard deviation over
 the runs, and the relative difference. Rows without runs in the dataset say
@@ -26,8 +26,8 @@ import numpy as np
 import pandas as pd
 
 from pipeline.errors import ConfigError
-from pipeline.papers import load_paper, paper_names
-from pipeline.tables import rel, table
+from pipeline.reproduction.papers import load_paper, paper_names
+from pipeline.report.tables import rel, table
 
 #: printed quantity -> dataset column (design variables: ``param_<name>``)
 QUANTITIES = {"V": "volume", "gdi": "gdi", "lci_min": "inverse_condition_min", "lci_max": "inverse_condition_max"}
@@ -50,7 +50,7 @@ def compare(best: pd.DataFrame, paper: dict) -> list[list]:
         The dataset's ``best`` table (one row per run; columns ``mechanism``,
         ``objective``, ``w_d``, ``optimizer``, ``volume``, ``gdi``, ``param_*``).
     paper : dict
-        A paper's reference data (:func:`pipeline.papers.load_paper`).
+        A paper's reference data (:func:`pipeline.reproduction.papers.load_paper`).
     """
     out = []
     for row in paper["rows"]:
@@ -83,12 +83,12 @@ def report(dataset: Path, paper_name: str) -> str:
     rows = compare(best, paper)
     return (f"# {paper_name}: the paper's tables beside {dataset}\n\n"
             f"Ours: mean ± standard deviation over the runs of each objective and optimiser. "
-            f"What the paper's numbers mean: `pipeline/papers/{paper_name}.yaml`.\n\n"
+            f"What the paper's numbers mean: `pipeline/reproduction/papers/{paper_name}.yaml`.\n\n"
             + table(["table", "optimiser", "runs", "quantity", "paper", "ours", "difference"], rows) + "\n")
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m pipeline.paper_report", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(prog="python -m pipeline.reproduction.paper_report", description=__doc__.split("\n")[0])
     parser.add_argument("dataset", type=Path, help="dataset directory (e.g. outputs/dataset)")
     parser.add_argument("--paper", required=True, help=f"one of {', '.join(paper_names())}")
     parser.add_argument("--out", type=Path, help="write the Markdown here instead of printing it")
@@ -96,10 +96,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         text = report(args.dataset, args.paper)
         if args.out is not None:
-            from pipeline.config import check_writable
+            from pipeline.errors import check_writable
 
             check_writable("--out", args.out)
-            from pipeline.io import write_text
+            from pipeline.store.parquet import write_text
 
             write_text(args.out, text)
         else:

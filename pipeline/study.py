@@ -26,33 +26,27 @@ from __future__ import annotations
 import json
 import logging
 import secrets
-import sys
 import time
 from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from hydra.core.hydra_config import HydraConfig
-from hydra.types import RunMode
 from joblib import parallel_config
 from omegaconf import DictConfig
 
-from pipeline import workers
-from pipeline.cache import CODE_VERSION, cached
-from pipeline.config import Config, launch_id, validate
-from pipeline.errors import ConfigError, RunError
-from pipeline.evaluate import evaluate_designs
-from pipeline.io import git_commit, write_bytes, write_parquet, write_text
-from pipeline.objective import EVALUATION_FIELDS, objective_values
-from pipeline.optimise import optimise_design
-from pipeline.plot import run_figures
-from pipeline.sample import sample_designs
+from pipeline.config import Config, validate
+from pipeline.errors import RunError
+from pipeline.objectives import EVALUATION_FIELDS, objective_values
+from pipeline.stages.evaluate import evaluate_designs
+from pipeline.stages.optimise import optimise_design
+from pipeline.stages.plot import run_figures
+from pipeline.stages.sample import sample_designs
+from pipeline.store.cache import CODE_VERSION, cached
+from pipeline.store.parquet import git_commit, write_bytes, write_parquet, write_text
+from pipeline.store.runs import MANIFEST, check_run_dir, launch_id
 
 log = logging.getLogger(__name__)
-
-MANIFEST = "manifest.json"
-TABLES = ("best", "history", "designs", "front")
 
 
 @contextmanager
@@ -77,23 +71,6 @@ def parallel_backend(parallel):
     else:
         with parallel_config(backend=parallel.backend):
             yield
-
-
-def read_manifest(run_dir: Path) -> dict | None:
-    """The manifest of a run directory, or None (absent or unreadable)."""
-    try:
-        return json.loads((Path(run_dir) / MANIFEST).read_text())
-    except (OSError, ValueError):
-        return None
-
-
-def check_run_dir(run_dir: Path) -> None:
-    """Refuse a directory that already holds a run (one line); results are never replaced."""
-    manifest = read_manifest(run_dir)
-    if manifest is not None or any(Path(run_dir).glob("*.parquet")):
-        held = manifest.get("run_id", "?") if manifest else "results"
-        raise ConfigError(f"hydra.run.dir={str(run_dir)!r} is invalid: it already holds run {held}; "
-                          f"allowed: a new directory (the default makes one per launch)")
 
 
 def run_study(cfg: DictConfig | Config, run_dir: Path, job: int = 0, overrides: list[str] | None = None
@@ -226,52 +203,3 @@ def _plots(c: Config, optimum: dict, run_dir: Path) -> dict[str, Path]:
     return out
 
 
-def remove_if_empty(path: Path, levels: int = 3) -> None:
-    """Hydra creates the run directory (and its parents) before the task starts; remove the
-    empty ones it made (the run directory and up to ``levels - 1`` empty parents)."""
-    for _ in range(levels):
-        try:
-            path.rmdir()
-        except OSError:
-            return
-        path = path.parent
-
-
-def shutdown_workers() -> None:
-    """End the fitness workers and joblib's reusable ones (after Ctrl-C, so none outlives the run)."""
-    workers.shutdown_workers(kill=True)
-    try:
-        from joblib.externals.loky import get_reusable_executor
-
-        get_reusable_executor().shutdown(wait=False, kill_workers=True)
-    except Exception:  # noqa: BLE001 - best effort at exit; the process is ending anyway
-        pass
-
-
-def run_from_hydra(cfg: DictConfig) -> dict:
-    """The task of ``python -m pipeline``: one run, its failure reported as one line.
-
-    Single run: bad input exits 2, a run-time failure 1, Ctrl-C 130, each with
-    one ``error:`` line and no traceback. In a multirun a run-time failure is
-    returned as the job's status so the other jobs go on
-    (:class:`pipeline.sweeper.CheckedSweeper` sums them up).
-    """
-    hc = HydraConfig.get()
-    run_dir = Path(hc.runtime.output_dir)
-    multirun = hc.mode == RunMode.MULTIRUN
-    job = int(hc.job.num) if multirun else 0
-    try:
-        run_study(cfg, run_dir, job, list(hc.overrides.task))
-        return {"status": "complete", "reason": ""}
-    except (ConfigError, RunError) as exc:
-        if isinstance(exc, ConfigError):
-            remove_if_empty(run_dir)
-        if multirun:
-            log.error("job %d failed: %s", job, exc)
-            return {"status": "failed", "reason": str(exc)}
-        print(f"error: {exc}", file=sys.stderr)
-        sys.exit(2 if isinstance(exc, ConfigError) else 1)
-    except KeyboardInterrupt:
-        shutdown_workers()
-        print(f"error: interrupted; {run_dir} is marked interrupted and will not be aggregated", file=sys.stderr)
-        sys.exit(130)

@@ -48,10 +48,6 @@ class CheckedSweeperConf:
     params: Optional[Dict[str, str]] = None
 
 
-def register_sweeper(cs) -> None:
-    cs.store(group="hydra/sweeper", name="checked", node=CheckedSweeperConf, provider="pm-design")
-
-
 def _fail(message: str, code: int = 2) -> None:
     print(f"error: {message}", file=sys.stderr)
     sys.exit(code)
@@ -116,7 +112,7 @@ class CheckedSweeper(BasicSweeper):
         self.launcher = None
 
     def sweep(self, arguments: List[str]) -> Any:
-        from pipeline.config import LAUNCH_ENV, launch_id
+        from pipeline.store.runs import LAUNCH_ENV, launch_id
 
         # one launch id and one literal sweep dir for every job, also for launchers
         # that run jobs in other processes (they would resolve ${run_id:} afresh)
@@ -165,8 +161,8 @@ class CheckedSweeper(BasicSweeper):
                 _fail(f"{label}: {str(exc).strip().splitlines()[0]}")
 
     def _finish(self, results: list, sweep_dir: Path) -> None:
-        from pipeline.aggregate import aggregate
-        from pipeline.plot import plot_tradeoff
+        from pipeline.stages.aggregate import aggregate
+        from pipeline.stages.plot import plot_tradeoff
         from pipeline.report import write_report
 
         failed = []

@@ -8,7 +8,7 @@ Steps (each optional part set in the optimiser's config):
 2. ``polish``: :func:`pipeline.optimizers.polish.polish` from that design;
 3. the result of 1-2 is the run's optimum; it is re-evaluated at
    ``refine_factor`` times the resolution, and probed for flat variables
-   (:func:`pipeline.sensitivity.flat_intervals`);
+   (:func:`pipeline.optimizers.sensitivity.flat_intervals`);
 4. ``reference``: the reference optimiser (CMA-ES + polish, same seed) is run
    too, and its value, design and the run's relative gap to it are recorded
    (``reference_value``, ``<name>_reference``, ``reference_gap``). The
@@ -27,11 +27,12 @@ import pandas as pd
 
 from kinematics.workspace import default_resolution
 from pipeline.config import MechanismConfig, ObjectiveConfig
-from pipeline.evaluate import evaluation_frame
-from pipeline.objective import EVALUATION_FIELDS, OBJECTIVES, DesignEvaluator, objective_values
+from pipeline.stages.evaluate import evaluation_frame
+from pipeline.evaluation import DesignEvaluator
+from pipeline.objectives import EVALUATION_FIELDS, OBJECTIVES, objective_values
 from pipeline.optimizers import OPTIMIZERS, REFERENCE_OPTIMIZER, OptimizerConfig, Problem, reference_optimum
 from pipeline.optimizers.polish import polish
-from pipeline.sensitivity import flat_intervals
+from pipeline.optimizers.sensitivity import flat_intervals
 
 log = logging.getLogger(__name__)
 

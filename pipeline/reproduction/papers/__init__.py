@@ -4,7 +4,7 @@ One YAML file per paper and mechanism (``<name>.yaml``): ``mechanism``, the
 ``experiments`` that reproduce each objective, and ``rows``, one per printed
 table row, with the objective (and ``w_d`` for the mixed index), the printed
 values and the printed optimal design. Units are stated in each file's header.
-:mod:`pipeline.paper_report` compares a dataset with them; the reproduction
+:mod:`pipeline.reproduction.paper_report` compares a dataset with them; the reproduction
 document and the readings study read the same rows.
 """
 

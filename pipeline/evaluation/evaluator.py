@@ -1,23 +1,16 @@
-"""Design objectives, defined once, and the parallel batch evaluation of designs.
-
-:data:`OBJECTIVES` is the registry of scalar objectives (all maximised) over
-one workspace evaluation: ``volume`` (seed 000 Table 1, seed 001 Table 2),
-``gdi`` (seed 000 Table 2), ``suri`` (V/V*) and ``mixed``, the index of seed
-000 eq. 36, ``eta = w_d GDI + (1 - w_d) SURI``. Nothing else in the package
-writes that formula.
+"""The parallel batch evaluation of designs.
 
 :class:`DesignEvaluator` is a picklable description (mechanism config, grid
 options) whose :meth:`DesignEvaluator.evaluate` evaluates a population
 ``(P, n_design)`` in ``n_jobs`` chunks on the backend that
 ``joblib.parallel_config`` selects: loky by default (this process and
-``n_jobs - 1`` loky workers, :mod:`pipeline.workers`), dask inside
+``n_jobs - 1`` loky workers, :mod:`pipeline.evaluation.workers`), dask inside
 ``parallel_config("dask")``.
 Rows come back in input order, so results are the same whatever the number of workers.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,48 +20,8 @@ from joblib.parallel import get_active_backend
 
 from kinematics import MECHANISMS
 from kinematics.workspace import evaluate
-from pipeline import compile_ahead, workers
-
-#: scalar fields of one evaluation, in column order (units: kinematics.workspace)
-EVALUATION_FIELDS = ("volume", "gdi", "inverse_condition_min", "inverse_condition_max", "suri",
-                     "reference_volume", "n_samples", "n_inside", "valid")
-
-
-@dataclass(frozen=True)
-class Objective:
-    """A scalar objective over evaluation fields; maximised.
-
-    ``values(fields, w_d)`` maps the evaluation columns (dict of arrays (K,))
-    to the objective (K,); ``unit`` is ``"volume"`` when it carries the
-    mechanism's volume unit, else a literal unit ("1" dimensionless).
-    """
-
-    name: str
-    label: str
-    unit: str
-    values: Callable[[dict[str, np.ndarray], float], np.ndarray]
-    #: w_d of the objective's config option (only the mixed index uses it)
-    default_w_d: float = 0.5
-
-
-def _mixed(fields: dict[str, np.ndarray], w_d: float) -> np.ndarray:
-    """Seed 000 eq. 36: ``eta = w_d GDI + (1 - w_d) SURI`` (dimensionless)."""
-    return w_d * fields["gdi"] + (1.0 - w_d) * fields["suri"]
-
-
-OBJECTIVES: dict[str, Objective] = {
-    "volume": Objective("volume", "V", "volume", lambda f, w: f["volume"], 0.0),
-    "gdi": Objective("gdi", "GDI", "1", lambda f, w: f["gdi"], 1.0),
-    "suri": Objective("suri", "SURI", "1", lambda f, w: f["suri"], 0.0),
-    "mixed": Objective("mixed", "η", "1", _mixed),
-}
-
-
-def objective_values(name: str, rows: np.ndarray, w_d: float) -> np.ndarray:
-    """Objective ``name`` of evaluation rows (K, len(EVALUATION_FIELDS)) -> (K,); 0 where invalid."""
-    fields = {field: rows[:, k] for k, field in enumerate(EVALUATION_FIELDS)}
-    values = OBJECTIVES[name].values(fields, float(w_d))
-    return np.where(fields["valid"] > 0, np.nan_to_num(values, nan=0.0), 0.0)
+from pipeline.evaluation import compile_ahead, workers
+from pipeline.objectives import EVALUATION_FIELDS
 
 
 @dataclass(frozen=True)
@@ -127,7 +80,7 @@ class DesignEvaluator:
         n_chunks = min(self.n_jobs, designs.shape[0])
         backend, _ = get_active_backend()
         # loky (the default): this process evaluates the first chunk, a worker group
-        # (pipeline.workers) the others; joblib's Parallel polls for results every
+        # (pipeline.evaluation.workers) the others; joblib's Parallel polls for results every
         # 10 ms, which cost 5-10 ms of every GA generation. Made before the
         # compilation below, so that the workers' start-up (~1.5 s) overlaps it.
         group = (workers.worker_group(self.n_jobs - 1, preload=(__name__,))
@@ -156,7 +109,7 @@ def _compile_kernels(spec: MechanismSpec, designs: np.ndarray) -> None:
     worker of the first batch on a new machine compiles the same kernels at
     the same time (~3 s each). After it, workers load them from the disk cache.
     A tiny grid (2 nodes per axis) of the first design that builds is enough.
-    A Ctrl-C during the compilation takes effect once it is done (:func:`pipeline.workers.sigint_deferred`).
+    A Ctrl-C during the compilation takes effect once it is done (:func:`pipeline.evaluation.workers.sigint_deferred`).
     """
     if spec.name in _COMPILED:
         return

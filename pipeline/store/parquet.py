@@ -19,7 +19,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from pipeline.cache import __version__
+from pipeline.store.cache import __version__
 from pipeline.errors import RunError
 
 META_CONFIG = b"pm_design.config"

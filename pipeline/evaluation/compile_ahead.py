@@ -4,8 +4,8 @@ Why: on a machine whose numba cache is empty, the first H4 run compiles its
 kernels (the fused columns kernel and the 4 x 4 conditioning batch, about
 2.8 s) before it can evaluate, while the second core sits idle during the
 ~2.3 s of imports and config composition. :func:`start` (called first thing
-by the entry point) runs ``python -m pipeline.compile_ahead``, which takes
-the default mechanism of ``pipeline/conf/config.yaml`` (H4, the main job's),
+by the entry point) runs ``python -m pipeline.evaluation.compile_ahead``, which takes
+the default mechanism of ``conf/config.yaml`` (H4, the main job's),
 says ``start <name>``, evaluates a tiny grid of one of its designs, so that
 numba compiles every kernel it uses into its on-disk cache, and says
 ``done <name>``. :func:`wait_for` (called before the first evaluation) reads
@@ -34,8 +34,10 @@ import sys
 import time
 from pathlib import Path
 
+from pipeline import CONFIG_DIR
+
 #: the main config, whose default mechanism the helper compiles
-CONFIG = Path(__file__).resolve().parent / "conf" / "config.yaml"
+CONFIG = CONFIG_DIR / "config.yaml"
 #: ``PM_DESIGN_COMPILE_AHEAD=0`` turns the helper off (benchmarks measure with and without it)
 SWITCH_ENV = "PM_DESIGN_COMPILE_AHEAD"
 #: seconds the run waits for the helper at most (it takes ~3.5 s on this machine)
@@ -75,7 +77,7 @@ def start() -> None:
     marker = _marker()
     if marker is None or marker.exists():
         return
-    process = subprocess.Popen([sys.executable, "-m", "pipeline.compile_ahead", str(marker)],
+    process = subprocess.Popen([sys.executable, "-m", "pipeline.evaluation.compile_ahead", str(marker)],
                                stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
                                preexec_fn=_ignore_sigint)
     _process.append(process)

@@ -1,0 +1,262 @@
+"""Typed configuration: one dataclass per config section, each checking its own ranges.
+
+The schema is the single description of the config. Each section's
+``__post_init__`` raises :class:`~pipeline.errors.ConfigError` with one line
+naming the field and what is allowed; :mod:`pipeline.config.validate` checks
+what spans sections and :mod:`pipeline.config.registry` stores the schema and
+the generated group options in Hydra's ConfigStore. Angles in the config are
+degrees; they are converted to radians once, in
+:meth:`MechanismConfig.evaluation_options`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from typing import Any, Optional
+
+import numpy as np
+from omegaconf import MISSING
+
+from kinematics import MECHANISMS
+from kinematics.base import Mechanism
+from pipeline.errors import ConfigError, check, finite
+from pipeline.objectives import OBJECTIVES
+from pipeline.optimizers.base import MAX_SEED
+
+BACKENDS = ("loky", "threading", "multiprocessing", "dask")
+_PLAIN_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,99}$")
+
+
+# ------------------------------------------------------------------ sections
+@dataclass
+class DesignSpace:
+    """Design variables: names (the class's, in order) and box bounds (design units)."""
+
+    names: list[str] = field(default_factory=list)
+    lower: list[float] = field(default_factory=list)
+    upper: list[float] = field(default_factory=list)
+
+
+@dataclass
+class MechanismConfig:
+    """One mechanism: registry name, fixed constructor parameters, design box, workspace limits.
+
+    ``orientation`` is the range of every angular pose variable in degrees
+    (null: the class's default); ``length`` the homogenising length in the
+    mechanism's length unit (null: the class's default). Empty ``names``,
+    ``lower``, ``upper`` and missing ``fixed`` entries take the class's values.
+    """
+
+    name: str = MISSING  # a registry name: the group options set it
+    fixed: dict[str, Any] = field(default_factory=dict)
+    design: DesignSpace = field(default_factory=DesignSpace)
+    orientation: Optional[list[float]] = None
+    min_inverse_condition: float = 0.01
+    length: Optional[float] = None
+
+    def __post_init__(self) -> None:
+        check("mechanism.name", self.name, self.name in MECHANISMS, "one of " + ", ".join(MECHANISMS))
+        cls = self.cls
+        expected = [v.name for v in cls.design_variables]
+        d = self.design
+        d.names = list(d.names) or expected
+        check("mechanism.design.names", d.names, d.names == expected, f"{expected}")
+        d.lower = [float(v) for v in (d.lower or [v.lower for v in cls.design_variables])]
+        d.upper = [float(v) for v in (d.upper or [v.upper for v in cls.design_variables])]
+        for key in ("lower", "upper"):
+            values = getattr(d, key)
+            check(f"mechanism.design.{key}", values, len(values) == len(expected), f"{len(expected)} numbers")
+        for name, lo, hi in zip(expected, d.lower, d.upper):
+            check(f"mechanism.design bounds of {name}", [lo, hi], finite(lo) and finite(hi) and lo < hi,
+                  "finite numbers with lower < upper")
+        unknown = sorted(set(self.fixed) - set(cls.default_fixed))
+        check(f"mechanism.fixed.{unknown[0] if unknown else ''}", self.fixed.get(unknown[0]) if unknown else None,
+              not unknown, "keys " + ", ".join(cls.default_fixed) + f" for {self.name}")
+        self.fixed = {**cls.default_fixed, **dict(self.fixed)}
+        if self.orientation is not None:
+            o = list(self.orientation)
+            check("mechanism.orientation", o, len(o) == 2 and all(finite(v) for v in o)
+                  and -360 <= o[0] <= o[1] <= 360, "null or [lo, hi] in degrees, -360 <= lo <= hi <= 360")
+            self.orientation = [float(v) for v in o]
+        check("mechanism.min_inverse_condition", self.min_inverse_condition,
+              finite(self.min_inverse_condition) and 0 <= self.min_inverse_condition < 1, "[0, 1)")
+        check("mechanism.length", self.length, self.length is None or (finite(self.length) and self.length > 0),
+              "null or a finite number > 0")
+        try:
+            self.build(self.centre)
+        except (TypeError, ValueError) as exc:
+            raise ConfigError(f"mechanism.fixed: {exc}") from None
+
+    @property
+    def cls(self) -> type[Mechanism]:
+        return MECHANISMS[self.name]
+
+    @property
+    def centre(self) -> np.ndarray:
+        return 0.5 * (np.asarray(self.design.lower) + np.asarray(self.design.upper))
+
+    def build(self, design: np.ndarray) -> Mechanism:
+        """The mechanism of one design vector (design units); ValueError if the design is infeasible."""
+        return self.cls.from_design(np.asarray(design, dtype=float), **self.fixed)
+
+    def orientation_rad(self) -> tuple[float, float] | None:
+        """``orientation`` in radians (None: the class's default)."""
+        return None if self.orientation is None else tuple(math.radians(v) for v in self.orientation)
+
+    def evaluation_options(self) -> dict:
+        """Keyword options of :func:`kinematics.workspace.evaluate` (angles in rad)."""
+        options: dict = {"min_inverse_condition": float(self.min_inverse_condition)}
+        if self.orientation is not None:
+            options["orientation"] = self.orientation_rad()
+        if self.length is not None:
+            options["length"] = float(self.length)
+        return options
+
+    @classmethod
+    def for_class(cls, mechanism: type[Mechanism]) -> "MechanismConfig":
+        """The default config of a mechanism class (its Hydra group option)."""
+        probe_orientation = None
+        if any(mechanism.angular):
+            lo, hi = _default_orientation(mechanism)
+            probe_orientation = [round(math.degrees(lo), 9), round(math.degrees(hi), 9)]
+        return cls(name=mechanism.name, fixed=dict(mechanism.default_fixed),
+                   design=DesignSpace(names=[v.name for v in mechanism.design_variables],
+                                      lower=[v.lower for v in mechanism.design_variables],
+                                      upper=[v.upper for v in mechanism.design_variables]),
+                   orientation=probe_orientation)
+
+
+def _default_orientation(mechanism: type[Mechanism]) -> tuple[float, float]:
+    centre = [0.5 * (v.lower + v.upper) for v in mechanism.design_variables]
+    return mechanism.from_design(np.array(centre), **mechanism.default_fixed).default_orientation
+
+
+@dataclass
+class ObjectiveConfig:
+    """The maximised objective (:data:`pipeline.objectives.OBJECTIVES`) and the GDI weight of η."""
+
+    name: str = "mixed"
+    w_d: float = 0.5
+
+    def __post_init__(self) -> None:
+        check("objective.name", self.name, self.name in OBJECTIVES, "one of " + ", ".join(OBJECTIVES))
+        check("objective.w_d", self.w_d, finite(self.w_d) and 0 <= self.w_d <= 1, "[0, 1]")
+        self.w_d = float(self.w_d)
+
+
+@dataclass
+class SampleConfig:
+    """Scrambled Sobol designs evaluated by the sample/evaluate stages."""
+
+    n: int = 64
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        check("sample.n", self.n, 1 <= self.n <= 1_000_000, "an integer in [1, 1000000]")
+        check("sample.seed", self.seed, 0 <= self.seed <= MAX_SEED, f"an integer in [0, {MAX_SEED}]")
+
+
+@dataclass
+class EvaluateConfig:
+    """Workspace integration: grid resolution and the budgets that bound it.
+
+    ``resolution``: grid points per sampled axis (null: the mechanism's
+    default). Below the mechanism's ``min_resolution`` the volume or GDI error
+    exceeds about 3 %, so it is refused unless ``allow_coarse`` (tests, quick
+    looks). ``max_nodes``: nodes of one evaluation, refined one included
+    (memory and time); ``max_hours``: estimated wall time of the run.
+    """
+
+    resolution: Optional[int] = None
+    refine_factor: int = 4
+    allow_coarse: bool = False
+    max_nodes: int = 4_000_000
+    max_hours: float = 12.0
+
+    def __post_init__(self) -> None:
+        check("evaluate.resolution", self.resolution, self.resolution is None or 1 <= self.resolution <= 100_000,
+              "null or an integer in [1, 100000]")
+        check("evaluate.refine_factor", self.refine_factor, 1 <= self.refine_factor <= 8, "an integer in [1, 8]")
+        check("evaluate.max_nodes", self.max_nodes, 1_000 <= self.max_nodes <= 10**9, "an integer in [1000, 1e9]")
+        check("evaluate.max_hours", self.max_hours, finite(self.max_hours) and 0 < self.max_hours <= 10_000,
+              "(0, 10000]")
+
+
+@dataclass
+class ParallelConfig:
+    """Fitness evaluations: joblib workers and backend (execution only: not in result files)."""
+
+    n_jobs: int = 2
+    backend: str = "loky"
+    #: dask only: address of a running scheduler (tcp://host:port); null starts a LocalCluster
+    scheduler_address: Optional[str] = None
+
+    def __post_init__(self) -> None:
+        check("parallel.n_jobs", self.n_jobs, 1 <= self.n_jobs <= 1024, "an integer in [1, 1024]")
+        check("parallel.backend", self.backend, self.backend in BACKENDS, "one of " + ", ".join(BACKENDS))
+        address = self.scheduler_address
+        check("parallel.scheduler_address", address,
+              address is None or re.fullmatch(r"(tcp|tls)://[^\s:/]+:\d{1,5}", address) is not None,
+              "null or tcp://host:port")
+
+
+@dataclass
+class PathsConfig:
+    """Where results, the stage cache and the aggregated dataset go (must be writable)."""
+
+    output_dir: str = "outputs"
+    cache_dir: str = "outputs/cache"
+    dataset_dir: str = "outputs/dataset"
+
+
+@dataclass
+class PlotConfig:
+    enabled: bool = True
+    #: extra vector format beside the PNG (null: PNG only)
+    format: Optional[str] = None
+    dpi: int = 150
+
+    def __post_init__(self) -> None:
+        check("plot.format", self.format, self.format is None or self.format in ("pdf", "svg"), "null, pdf or svg")
+        check("plot.dpi", self.dpi, 50 <= self.dpi <= 1200, "an integer in [50, 1200]")
+
+
+@dataclass
+class Config:
+    experiment_name: str = "default"
+    # group options fill these (mechanism=..., objective=..., optimizer=...); no default to merge into
+    mechanism: MechanismConfig = MISSING
+    objective: ObjectiveConfig = MISSING
+    optimizer: Any = MISSING
+    sample: SampleConfig = field(default_factory=SampleConfig)
+    evaluate: EvaluateConfig = field(default_factory=EvaluateConfig)
+    parallel: ParallelConfig = field(default_factory=ParallelConfig)
+    paths: PathsConfig = field(default_factory=PathsConfig)
+    plot: PlotConfig = field(default_factory=PlotConfig)
+
+    def __post_init__(self) -> None:
+        check("experiment_name", self.experiment_name,
+              isinstance(self.experiment_name, str) and bool(_PLAIN_NAME.match(self.experiment_name)),
+              "a plain name of letters, digits, '_', '.', '-' (no '/', at most 100 characters)")
+
+    #: sections that say how to run, not what to compute: kept out of result files
+    EXECUTION_SECTIONS = ("parallel", "paths", "plot")
+
+    def result_dict(self) -> dict:
+        """The resolved config without the execution sections (stored with every result)."""
+        out = dataclasses.asdict(self)
+        for name in self.EXECUTION_SECTIONS:
+            out.pop(name)
+        return out
+
+    def config_hash(self) -> str:
+        """Content hash (16 hex digits) of :meth:`result_dict`: equal for equal studies."""
+        text = json.dumps(self.result_dict(), sort_keys=True, default=str)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+

@@ -1,0 +1,130 @@
+"""Checks of a composed config before any work: unknown keys, ranges, grid budget, paths, dask.
+
+:func:`validate` turns a composed Hydra config into the typed
+:class:`~pipeline.config.schema.Config` (``OmegaConf.to_object``, which runs
+every section's own range checks), after refusing unknown keys, then checks
+what spans sections. Each failure is one :class:`~pipeline.errors.ConfigError`
+line naming the field and what is allowed.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import socket
+
+from omegaconf import DictConfig, OmegaConf, open_dict
+from omegaconf.errors import OmegaConfBaseException
+
+from pipeline.config.schema import Config, ParallelConfig
+from pipeline.errors import ConfigError, check, check_writable
+from pipeline.optimizers import OPTIMIZERS
+
+#: conservative grid throughput (nodes/s per worker) for the run-time estimate
+NODES_PER_SECOND = 1.0e6
+
+
+def _refuse_unknown_keys(node: DictConfig, schema: type, prefix: str) -> None:
+    allowed = {f.name for f in dataclasses.fields(schema)}
+    for key in node.keys():
+        if key == "hydra" and not prefix:
+            continue
+        if key not in allowed:
+            raise ConfigError(f"{prefix}{key} is an unknown key: allowed {', '.join(sorted(allowed))}")
+        child = node._get_node(key)
+        child_type = OmegaConf.get_type(node, key) if isinstance(child, DictConfig) else None
+        if isinstance(child, DictConfig) and dataclasses.is_dataclass(child_type):
+            _refuse_unknown_keys(child, child_type, f"{prefix}{key}.")
+
+
+def validate(cfg: DictConfig | Config) -> Config:
+    """The typed config of a composed Hydra config, checked before any work.
+
+    Raises
+    ------
+    ConfigError
+        One line naming the first bad field and what is allowed.
+    """
+    if isinstance(cfg, DictConfig):
+        _refuse_unknown_keys(cfg, Config, "")
+        optimizer = cfg.get("optimizer")
+        name = optimizer.get("name") if isinstance(optimizer, DictConfig) else None
+        check("optimizer.name", name, name in OPTIMIZERS, "one of " + ", ".join(OPTIMIZERS))
+        if OmegaConf.get_type(optimizer) is not OPTIMIZERS[name].Config:
+            raise ConfigError(f"optimizer.name={name!r} is invalid: choose the optimiser with "
+                              f"optimizer={name} (allowed: {', '.join(OPTIMIZERS)})")
+        try:
+            if "hydra" in cfg:  # a sweep job's config carries Hydra's own node
+                cfg = copy.deepcopy(cfg)
+                with open_dict(cfg):
+                    del cfg["hydra"]
+            typed = OmegaConf.to_object(cfg)
+        except OmegaConfBaseException as exc:
+            key = getattr(exc, "full_key", None) or "config"
+            raise ConfigError(f"{key} is invalid: {str(exc).splitlines()[0]}") from None
+    else:
+        typed = cfg
+    _check_budget(typed)
+    _check_parallel(typed.parallel)
+    _check_kernels()
+    for key in ("output_dir", "cache_dir", "dataset_dir"):
+        check_writable(f"paths.{key}", getattr(typed.paths, key))
+    return typed
+
+
+def _check_budget(c: Config) -> None:
+    """Grid resolution between the mechanism's minimum and the node and time budgets."""
+    from kinematics.workspace import default_resolution, sampled_axes
+
+    mech = c.mechanism.build(c.mechanism.centre)
+    orientation = c.mechanism.orientation_rad() or mech.default_orientation
+    n_axes = max(len(sampled_axes(mech, orientation)), 1)
+    res = c.evaluate.resolution
+    if res is not None and res < mech.min_resolution and not c.evaluate.allow_coarse:
+        raise ConfigError(f"evaluate.resolution={res} is invalid: allowed >= {mech.min_resolution} for "
+                          f"{c.mechanism.name} (coarser grids err by more than ~3 % in V or GDI; "
+                          f"evaluate.allow_coarse=true to accept that)")
+    res = res or default_resolution(mech, orientation)
+    refined_nodes = float(res * c.evaluate.refine_factor) ** n_axes
+    if refined_nodes > c.evaluate.max_nodes:
+        top = int(c.evaluate.max_nodes ** (1 / n_axes) / c.evaluate.refine_factor)
+        raise ConfigError(f"evaluate.resolution={res} is invalid: allowed <= {top} for {c.mechanism.name} "
+                          f"({n_axes} sampled axes x refine_factor {c.evaluate.refine_factor} give "
+                          f"{refined_nodes:.3g} nodes > evaluate.max_nodes={c.evaluate.max_nodes})")
+    evaluations = c.sample.n + OPTIMIZERS[c.optimizer.name](c.optimizer).expected_evaluations()
+    hours = evaluations * float(res) ** n_axes / (NODES_PER_SECOND * c.parallel.n_jobs) / 3600
+    if hours > c.evaluate.max_hours:
+        raise ConfigError(f"evaluate.resolution={res} is invalid: the run is estimated at {hours:.3g} h "
+                          f"> evaluate.max_hours={c.evaluate.max_hours} ({evaluations} evaluations of "
+                          f"{float(res) ** n_axes:.3g} nodes at {NODES_PER_SECOND:.0e} nodes/s/worker)")
+
+
+def _check_kernels() -> None:
+    """The environment's kernel choice (``PM_DESIGN_KERNELS``, kinematics/kernels.py) is known."""
+    from kinematics import kernels
+
+    try:
+        kernels.compiled()
+    except ValueError as exc:
+        raise ConfigError(str(exc)) from None
+
+
+def _check_parallel(p: ParallelConfig) -> None:
+    """dask installed and its scheduler reachable (within 5 s), before any work."""
+    if p.backend != "dask":
+        return
+    try:
+        import distributed  # noqa: F401  (only when the dask backend is asked for)
+    except ImportError:
+        raise ConfigError("parallel.backend='dask' is invalid: dask.distributed is not installed "
+                          "(pip install -e \".[dask]\"); allowed without it: loky, threading, multiprocessing") from None
+    if p.scheduler_address:
+        host, port = p.scheduler_address.split("://", 1)[1].rsplit(":", 1)
+        try:
+            socket.create_connection((host, int(port)), timeout=5).close()
+        except OSError as exc:
+            raise ConfigError(f"parallel.scheduler_address={p.scheduler_address!r} is invalid: no scheduler "
+                              f"answers there ({exc.strerror or exc}); allowed: a reachable "
+                              f"tcp://host:port or null for a local cluster") from None
+
+
