@@ -52,11 +52,17 @@ class MechanismConfig:
     ``lower``, ``upper`` and missing ``fixed`` entries take the class's values.
     """
 
-    name: str = MISSING  # a registry name: the group options set it
+    #: registry name of the mechanism class (the group option `mechanism=NAME` sets it)
+    name: str = MISSING
+    #: fixed constructor parameters and paper readings (per mechanism, listed below); missing keys take the class's
     fixed: dict[str, Any] = field(default_factory=dict)
+    #: design box: `names`, `lower`, `upper` in the design variables' units (empty: the class's)
     design: DesignSpace = field(default_factory=DesignSpace)
+    #: range [lo, hi] of every angular pose variable, degrees (null: the class's default)
     orientation: Optional[list[float]] = None
+    #: dexterity limit 1/κ of a workspace pose, [0, 1) (seed 000 Sec. 4.4)
     min_inverse_condition: float = 0.01
+    #: homogenising length of the Jacobian, mechanism length unit (null: the class's)
     length: Optional[float] = None
 
     def __post_init__(self) -> None:
@@ -140,7 +146,9 @@ def _default_orientation(mechanism: type[Mechanism]) -> tuple[float, float]:
 class ObjectiveConfig:
     """The maximised objective (:data:`pipeline.objectives.OBJECTIVES`) and the GDI weight of η."""
 
+    #: the maximised objective (the group option `objective=NAME` sets it)
     name: str = "mixed"
+    #: weight of the GDI in η = w_d·GDI + (1 − w_d)·SURI, [0, 1] (seed 000 eq. 36)
     w_d: float = 0.5
 
     def __post_init__(self) -> None:
@@ -153,7 +161,9 @@ class ObjectiveConfig:
 class SampleConfig:
     """Scrambled Sobol designs evaluated by the sample/evaluate stages."""
 
+    #: number of Sobol designs, [1, 1e6]
     n: int = 64
+    #: seed of the scrambled Sobol sequence
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -172,10 +182,15 @@ class EvaluateConfig:
     (memory and time); ``max_hours``: estimated wall time of the run.
     """
 
+    #: grid points per sampled axis (null: the mechanism's default)
     resolution: Optional[int] = None
+    #: the optimum is re-evaluated at refine_factor × resolution, [1, 8]
     refine_factor: int = 4
+    #: accept a resolution below the mechanism's minimum (tests, quick looks)
     allow_coarse: bool = False
+    #: nodes of one evaluation, refined one included (memory and time budget)
     max_nodes: int = 4_000_000
+    #: estimated wall time of the run, hours (checked before work)
     max_hours: float = 12.0
 
     def __post_init__(self) -> None:
@@ -191,7 +206,9 @@ class EvaluateConfig:
 class ParallelConfig:
     """Fitness evaluations: joblib workers and backend (execution only: not in result files)."""
 
+    #: parallel fitness evaluations (loky: this process plus n_jobs − 1 workers)
     n_jobs: int = 2
+    #: joblib backend: loky, threading, multiprocessing, dask
     backend: str = "loky"
     #: dask only: address of a running scheduler (tcp://host:port); null starts a LocalCluster
     scheduler_address: Optional[str] = None
@@ -209,16 +226,23 @@ class ParallelConfig:
 class PathsConfig:
     """Where results, the stage cache and the aggregated dataset go (must be writable)."""
 
+    #: results root: runs/, sweeps/, cache/, dataset/ below it (relative to the working folder)
     output_dir: str = "outputs"
-    cache_dir: str = "outputs/cache"
-    dataset_dir: str = "outputs/dataset"
+    #: joblib.Memory of the stages
+    cache_dir: str = "${paths.output_dir}/cache"
+    #: the aggregated Parquet dataset
+    dataset_dir: str = "${paths.output_dir}/dataset"
 
 
 @dataclass
 class PlotConfig:
+    """The run's figures: on/off, an extra vector format, resolution."""
+
+    #: write the run's figures
     enabled: bool = True
     #: extra vector format beside the PNG (null: PNG only)
     format: Optional[str] = None
+    #: PNG resolution, [50, 1200]
     dpi: int = 150
 
     def __post_init__(self) -> None:
@@ -228,6 +252,7 @@ class PlotConfig:
 
 @dataclass
 class Config:
+    #: names the run and sweep folders and the dataset rows (experiment files set it)
     experiment_name: str = "default"
     # group options fill these (mechanism=..., objective=..., optimizer=...); no default to merge into
     mechanism: MechanismConfig = MISSING

@@ -45,9 +45,13 @@ class OptimizerConfig:
     """
 
     name: str = "?"
+    #: seed of every random choice of the optimiser
     seed: int = 0
+    #: end with the polish step (bounded compass search)
     polish: bool = True
+    #: also run the reference optimisation and record the gap to it
     reference: bool = False
+    #: evaluation budget of the polish step
     polish_evaluations: int = 150
 
     def __post_init__(self) -> None:

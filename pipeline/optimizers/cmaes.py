@@ -44,6 +44,7 @@ class CMAESConfig(OptimizerConfig):
     sigma0: float = 0.3
     #: first population; null = cma's default 4 + 3 ln(n)
     popsize: Optional[int] = None
+    #: IPOP restarts (population doubled at each)
     restarts: int = 4
 
     def __post_init__(self) -> None:

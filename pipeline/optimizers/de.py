@@ -24,9 +24,13 @@ class DEConfig(OptimizerConfig):
     """scipy DE settings; ``population >= 5`` (scipy needs five members for its mutation)."""
 
     name: str = "de"
+    #: individuals per generation
     population: int = 30
+    #: generations
     generations: int = 150
+    #: differential weight F
     mutation: float = 0.5
+    #: crossover probability CR
     recombination: float = 0.7
 
     def __post_init__(self) -> None:

@@ -45,14 +45,21 @@ class GAConfig(OptimizerConfig):
     name: str = "ga"
     polish: bool = False
     reference: bool = True
+    #: individuals per generation (seed 000 Sec. 4.5)
     population: int = 30
+    #: generations (seed 000 Sec. 4.5)
     generations: int = 150
+    #: normalised geometric selection probability q
     selection_q: float = 0.08
+    #: arithmetic crossover probability
     crossover_rate: float = 0.8
+    #: non-uniform mutation probability
     mutation_rate: float = 0.08
+    #: shape b of the non-uniform mutation
     mutation_shape: float = 3.0
     #: start from the best sampled designs (off for paper reproduction)
     seed_from_samples: bool = False
+    #: how many best sampled designs seed the first population
     seed_count: int = 5
 
     def __post_init__(self) -> None:

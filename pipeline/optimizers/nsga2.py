@@ -28,11 +28,17 @@ class NSGA2Config(OptimizerConfig):
 
     name: str = "nsga2"
     polish: bool = False
+    #: individuals per generation
     population: int = 40
+    #: generations
     generations: int = 40
+    #: the two maximised objectives (names of objective options)
     objectives: list[str] = field(default_factory=lambda: ["gdi", "suri"])
+    #: distribution index of simulated binary crossover
     eta_crossover: float = 15.0
+    #: distribution index of polynomial mutation
     eta_mutation: float = 20.0
+    #: crossover probability
     crossover_rate: float = 0.9
 
     def __post_init__(self) -> None:
