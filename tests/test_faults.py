@@ -24,6 +24,16 @@ ROOT = Path(__file__).resolve().parents[1]
 TINY = ["+debug=fast", "optimizer.population=4", "optimizer.generations=2"]
 
 
+def interruptible() -> None:
+    """``preexec_fn`` of a child that the test interrupts: Ctrl-C's default action restored.
+
+    Why: a test runner started with SIGINT ignored (in the background of a non-interactive
+    shell, as some CI runners do) passes that on to its children, and a Python started with
+    SIGINT ignored never raises KeyboardInterrupt, so the test would not test the CLI.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def run_cli(args: list[str], out: Path, module: str = "pipeline", timeout: float = 300
             ) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", module, *args], cwd=ROOT, capture_output=True, text=True,
@@ -227,7 +237,8 @@ def test_ctrl_c_stops_with_one_line_and_no_workers_left(tmp_path):
     proc = subprocess.Popen([sys.executable, "-m", "pipeline", "+experiment=h4_mixed", f"paths.output_dir={out}",
                              "sample.n=8", "optimizer.generations=100", "plot.enabled=false"],
                             cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+                            start_new_session=True, preexec_fn=interruptible,
+                            env={**os.environ, "PYTHONUNBUFFERED": "1"})
     deadline = time.time() + 120
     manifest = None
     while time.time() < deadline:
@@ -259,7 +270,8 @@ def test_ctrl_c_while_the_workers_start(delay, tmp_path):
     proc = subprocess.Popen([sys.executable, "-m", "pipeline", "+experiment=h4_mixed",
                              f"paths.output_dir={tmp_path / 'out'}", "sample.n=8", "plot.enabled=false"],
                             cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True, env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")})
+                            start_new_session=True, preexec_fn=interruptible,
+                            env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")})
     deadline = time.time() + 120
     while time.time() < deadline and not any(
             b"popen_loky_posix" in _cmdline(pid) for pid in _processes_in_session(proc.pid)):
