@@ -249,6 +249,11 @@ class Mechanism(ABC):
     #: constructor parameters that are not design variables, with their defaults
     #: (the pipeline's ``mechanism.fixed``; readings of the paper are among them)
     default_fixed: ClassVar[dict[str, object]] = {}
+    #: constructor parameters given in degrees (all other numbers are lengths in
+    #: :attr:`length_unit` unless listed in :attr:`unitless_params`)
+    angle_params: ClassVar[tuple[str, ...]] = ()
+    #: numeric constructor parameters without a unit (flags, signs)
+    unitless_params: ClassVar[tuple[str, ...]] = ()
     #: grid nodes per evaluation at the default resolution (speed vs. accuracy;
     #: see :func:`kinematics.workspace.default_resolution`)
     default_nodes: ClassVar[int] = 32**3
@@ -355,6 +360,19 @@ class Mechanism(ABC):
     def within_joint_limits(self, poses: np.ndarray) -> np.ndarray:
         """Passive-joint limits (N,) bool; True for mechanisms without such limits."""
         return np.ones(np.asarray(poses).shape[0], dtype=bool)
+
+    @classmethod
+    def param_unit(cls, name: str, value: object) -> str:
+        """Unit of constructor parameter ``name`` holding ``value``: "deg" for
+        :attr:`angle_params`, "1" for :attr:`unitless_params`, "" for text (a
+        reading's name), else :attr:`length_unit`."""
+        if isinstance(value, str):
+            return ""
+        if name in cls.angle_params:
+            return "deg"
+        if name in cls.unitless_params:
+            return "1"
+        return cls.length_unit
 
     def params(self) -> dict[str, object]:
         """Constructor keyword arguments that rebuild this mechanism."""

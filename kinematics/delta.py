@@ -72,6 +72,7 @@ class Delta(Mechanism):
     pose_names = ("x", "y", "z")
     angular = (False, False, False)
     length_unit = "mm"
+    angle_params = ("theta_min", "theta_max", "passive_limit")
     default_fixed = {"R": 200.0, "la": 200.0, "theta_min": -40.0, "theta_max": 80.0, "passive_limit": 45.0,
                      "z_max": 0.0}
     default_nodes = 32**3

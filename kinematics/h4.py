@@ -112,6 +112,7 @@ class H4(Mechanism):
     angular = (False, False, False, True)
     length_unit = "cm"
 
+    angle_params = ("ball_joint_limit",)
     default_fixed = {"stroke": 100.0, "base": "scaled", "ball_joint_limit": None, "homogenising": "h",
                      "v_star": "prism_theta"}
     default_nodes = 24**3

@@ -137,6 +137,8 @@ class Tricept(Mechanism):
         #: unit leg directions at the home pose (3, 3), the "home" cone reference
         self._home_axes = legs / np.linalg.norm(legs, axis=1, keepdims=True)
 
+    angle_params = ("cone", "tilt_limit")
+    unitless_params = ("offset_side",)
     default_fixed = {"q_min": 400.0, "q_max": 750.0, "cone": 60.0, "cone_joints": "both",
                      "cone_reference": "normal", "offset_side": 1, "tilt_limit": None, "homogenising": "arm"}
     default_nodes = 32**3

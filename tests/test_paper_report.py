@@ -42,7 +42,7 @@ def test_compare_groups_by_objective_w_d_and_optimiser():
         "mechanism": ["h4"] * 5 + ["tricept"], "objective": ["mixed"] * 4 + ["volume", "mixed"],
         "w_d": [0.5, 0.5, 0.5, 0.25, 0.0, 0.5], "optimizer": ["ga", "ga", "cmaes", "ga", "ga", "ga"],
         "volume": [100.0, 200.0, 300.0, 50.0, 70.0, 9.0], "gdi": [0.1, 0.3, 0.2, 0.4, 0.5, 0.9],
-        "param_d": [1.0, 3.0, 2.0, 4.0, 5.0, 6.0], "param_h": [1.0] * 6, "param_Qz": [40.0] * 6})
+        "param_d_cm": [1.0, 3.0, 2.0, 4.0, 5.0, 6.0], "param_h_cm": [1.0] * 6, "param_Qz_cm": [40.0] * 6})
     rows = compare(best, load_paper("seed000_h4"))
     by = {(r[0], r[1], r[3]): r for r in rows}
     ga_v = by[("Table 3 (w_d = 0.5)", "ga", "V")]

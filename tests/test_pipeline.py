@@ -88,7 +88,7 @@ def test_results_schema_and_refined_evaluation(tmp_path):
     cfg = make_cfg(["+experiment=h4_mixed", *tiny(tmp_path)])
     paths = run_study(cfg, tmp_path / "run")
     best = pd.read_parquet(paths["best"]).iloc[0]
-    for column in ("d_ratio", "h_ratio", "Qz_ratio", "param_d", "param_h", "param_Qz", "param_base", "volume",
+    for column in ("d_ratio", "h_ratio", "Qz_ratio", "param_d_cm", "param_h_cm", "param_Qz_cm", "param_base", "volume",
                    "gdi", "suri", "objective_value", "volume_refined", "gdi_refined", "objective_value_refined",
                    "optimizer_value", "found_by", "reference_gap", "flat_variables", "d_ratio_flat_lower",
                    "volume_unit", "at_bounds"):
@@ -96,7 +96,7 @@ def test_results_schema_and_refined_evaluation(tmp_path):
     for redundant in ("wd", "fitness", "eta", "inverse_condition_mean", "volume_error", "gdi_error"):
         assert redundant not in best.index
     assert best["objective_value"] == pytest.approx(0.5 * best["gdi"] + 0.5 * best["suri"])
-    assert best["param_d"] == pytest.approx(100 * best["d_ratio"])
+    assert best["param_d_cm"] == pytest.approx(100 * best["d_ratio"])
     assert best["volume_unit"] == "cm³·rad" and best["param_base"] == "scaled"
     schema = pq.read_schema(paths["best"])
     stored = json.loads(schema.metadata[b"pm_design.config"])

@@ -29,6 +29,8 @@ from pipeline.objectives import OBJECTIVES
 from pipeline.optimizers.base import MAX_SEED
 
 BACKENDS = ("loky", "threading", "multiprocessing", "dask")
+#: kinds of run: real studies, quick looks and tests (``+debug=fast``), speed measurements
+PURPOSES = ("study", "debug", "benchmark")
 _PLAIN_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,99}$")
 
 
@@ -254,6 +256,9 @@ class PlotConfig:
 class Config:
     #: names the run and sweep folders and the dataset rows (experiment files set it)
     experiment_name: str = "default"
+    #: why the run is made (:data:`PURPOSES`): debug runs (``+debug=...``) stay out of the
+    #: dataset's default view (:func:`pipeline.store.dataset.read_dataset`)
+    purpose: str = "study"
     # group options fill these (mechanism=..., objective=..., optimizer=...); no default to merge into
     mechanism: MechanismConfig = MISSING
     objective: ObjectiveConfig = MISSING
@@ -268,6 +273,7 @@ class Config:
         check("experiment_name", self.experiment_name,
               isinstance(self.experiment_name, str) and bool(_PLAIN_NAME.match(self.experiment_name)),
               "a plain name of letters, digits, '_', '.', '-' (no '/', at most 100 characters)")
+        check("purpose", self.purpose, self.purpose in PURPOSES, "one of " + ", ".join(PURPOSES))
 
     #: sections that say how to run, not what to compute: kept out of result files
     EXECUTION_SECTIONS = ("parallel", "paths", "plot")

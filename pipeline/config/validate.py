@@ -17,6 +17,7 @@ from omegaconf import DictConfig, OmegaConf, open_dict
 from omegaconf.errors import OmegaConfBaseException
 
 from pipeline.config.schema import Config, ParallelConfig
+from pipeline.config.suggest import did_you_mean
 from pipeline.errors import ConfigError, check, check_writable
 from pipeline.optimizers import OPTIMIZERS
 
@@ -30,7 +31,8 @@ def _refuse_unknown_keys(node: DictConfig, schema: type, prefix: str) -> None:
         if key == "hydra" and not prefix:
             continue
         if key not in allowed:
-            raise ConfigError(f"{prefix}{key} is an unknown key: allowed {', '.join(sorted(allowed))}")
+            suggestion = did_you_mean(str(key), allowed).replace("mean ", f"mean {prefix}")
+            raise ConfigError(f"{prefix}{key} is an unknown key: allowed {', '.join(sorted(allowed))}{suggestion}")
         child = node._get_node(key)
         child_type = OmegaConf.get_type(node, key) if isinstance(child, DictConfig) else None
         if isinstance(child, DictConfig) and dataclasses.is_dataclass(child_type):

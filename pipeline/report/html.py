@@ -1,13 +1,19 @@
-"""A sweep (or a whole dataset) on one self-contained page: ``report.html``.
+"""A sweep (or a whole dataset) on one page: ``report.html``.
 
 Written at the end of every multirun into the sweep directory, and on demand:
 ``python -m pipeline.report <sweep or dataset dir> [--out FILE]``. The page
-holds the sweep's config and each run's overrides, a sortable table of the
-optima (click a column header), the trade-off (GDI, SURI, η versus w_d,
-mean and range over seeds), the convergence of every group of runs (mean
-and range over seeds), Pareto fronts where there are any, the workspace
-figures of the best designs, and links to the Parquet files. Figures are
-embedded as PNG (base64), so the file can be mailed or archived alone.
+holds a sortable table of the optima (design variables with units, the gap
+to the reference optimum in percent, links to each run's Parquet files), the
+runs per group with distinct seeds and repeats told apart, the trade-off
+(GDI, SURI, η versus w_d), the convergence of every group (mean and range
+over distinct seeds, with the reference optimum), Pareto fronts, the
+workspace and 1/κ slices of the best designs (one colour scale per
+mechanism), the sweep's config and each run's overrides.
+
+Figures are embedded (base64 PNG), the script and style are inline (no
+network), and links to files are *relative* to the page: the folder can be
+zipped, moved or mailed and the links still work. The layout is usable from
+800 px wide (the table scrolls sideways inside its box).
 """
 
 from __future__ import annotations
@@ -15,36 +21,46 @@ from __future__ import annotations
 import argparse
 import base64
 import html
-import io
 import json
+import os
 import sys
 import tempfile
 import time
 from pathlib import Path
+from urllib.parse import quote
 
 import numpy as np
 import pandas as pd
 
-from pipeline.errors import ConfigError
-from pipeline.stages.plot import _figure, plot_tradeoff, symbol
+from kinematics import MECHANISMS
+from pipeline.errors import ConfigError, RunError
+from pipeline.report.figures import GROUP_KEYS, caption, convergence_figure, workspace_gallery
+from pipeline.stages.plot import plot_tradeoff, symbol
+from pipeline.store.dataset import DEFAULT_PURPOSES, read_dataset
 from pipeline.store.runs import MANIFEST, read_manifest
 
-#: columns of the optima table, in order (those present are shown)
-TABLE_COLUMNS = ("job", "mechanism", "objective", "w_d", "optimizer", "seed", "objective_value", "objective_unit",
-                 "volume", "volume_unit", "gdi", "suri", "reference_gap", "flat_variables", "at_bounds")
-#: workspace figures embedded at most (the best runs first)
-MAX_WORKSPACES = 12
+#: workspace figures embedded at most per mechanism (the best runs first)
+MAX_WORKSPACES = 6
+STATIC = Path(__file__).resolve().parent / "static"
 
 
 def load_sweep(source: Path) -> tuple[pd.DataFrame, pd.DataFrame, dict[str, Path], str]:
-    """(best, history, run directories by run id, config text) of a sweep or dataset directory."""
+    """(best, history, run directories by run id, config text) of a sweep, run or dataset directory.
+
+    A dataset is read with :func:`pipeline.store.dataset.read_dataset` (debug runs left out).
+    """
     source = Path(source)
     if (source / "runs").is_dir() and (source / "best").is_dir():  # a dataset
-        best = pd.read_parquet(source / "best")
-        history = pd.read_parquet(source / "history")
-        runs = pd.read_parquet(source / "runs")
+        purposes = DEFAULT_PURPOSES
+        best = read_dataset(source, "best", purposes)
+        note = ""
+        if best.empty:  # nothing but quick looks: show them rather than nothing, and say so
+            purposes, note = None, "; debug runs only"
+            best = read_dataset(source, "best", purposes)
+        history = read_dataset(source, "history", purposes)
+        runs = read_dataset(source, "runs", purposes)
         dirs = {r: Path(s) for r, s in zip(runs["run_id"], runs["source"])}
-        return best, history, dirs, f"dataset {source} ({len(runs)} runs)"
+        return best, history, dirs, f"dataset {source} ({len(runs)} runs{note or ', debug runs left out'})"
     frames_best, frames_history, dirs = [], [], {}
     for manifest_path in sorted(source.rglob(MANIFEST)):
         run = manifest_path.parent
@@ -67,110 +83,140 @@ def load_sweep(source: Path) -> tuple[pd.DataFrame, pd.DataFrame, dict[str, Path
             config)
 
 
-def _png(fig) -> str:
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=110)
-    return base64.b64encode(buffer.getvalue()).decode()
-
-
 def _img(data: str, alt: str) -> str:
-    return f'<img alt="{html.escape(alt)}" src="data:image/png;base64,{data}">'
+    return f'<div class="zoom"><img alt="{html.escape(alt)}" src="data:image/png;base64,{data}"></div>'
 
 
 def _file_img(path: Path, alt: str) -> str:
     return _img(base64.b64encode(path.read_bytes()).decode(), alt) if path.exists() else ""
 
 
-def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
-    """Best objective per generation, one line per (mechanism, objective, w_d, optimizer): mean and range over runs."""
-    keys = ["mechanism", "objective", "w_d", "optimizer"]
-    groups = best[["run_id", *keys]].merge(history[["run_id", "generation", "best"]], on="run_id")
-    by_objective = sorted(groups["objective"].astype(str).unique())
-    fig, axes = _figure(5.5 * len(by_objective), 4, len(by_objective))
-    for ax, objective in zip(axes, by_objective):
-        part = groups[groups["objective"].astype(str) == objective]
-        for key, frame in part.groupby(keys, sort=True):
-            stats = frame.groupby("generation")["best"].agg(["mean", "min", "max"])
-            label = f"{key[0]}, {key[3]}" + (f", w_d={key[2]:g}" if objective == "mixed" else "")
-            ax.plot(stats.index, stats["mean"], label=label)
-            ax.fill_between(stats.index, stats["min"], stats["max"], alpha=0.2)
-        ax.set_xlabel("generation")
-        unit = best.loc[best["objective"].astype(str) == objective, "objective_unit"].iloc[0]
-        ax.set_ylabel(f"{symbol(objective)} [{unit}]")
-        ax.set_title(f"convergence: {symbol(objective)} (mean and range over seeds)")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="lower right")
-    return _png(fig)
+def _cell(value, sort_value=None) -> str:
+    attr = "" if sort_value is None else f' data-value="{html.escape(str(sort_value))}"'
+    if value is None or (isinstance(value, float) and np.isnan(value)):
+        return f"<td{attr}></td>"
+    if isinstance(value, (float, np.floating)):
+        return f"<td{attr}>{float(value):.6g}</td>"
+    return f"<td{attr}>{html.escape(str(value))}</td>"
 
 
-def _cell(value) -> str:
-    if isinstance(value, float):
-        return "" if np.isnan(value) else f"{value:.6g}"
-    return html.escape(str(value))
+def design_columns(best: pd.DataFrame) -> list[tuple[str, str]]:
+    """(column, unit) of the design variables of the mechanisms in ``best``, in class order."""
+    out = []
+    for name in sorted(best["mechanism"].astype(str).unique()):
+        for v in MECHANISMS[name].design_variables if name in MECHANISMS else ():
+            if v.name in best.columns and v.name not in [c for c, _ in out]:
+                out.append((v.name, v.unit))
+    return out
 
 
-def build_report(source: Path) -> str:
-    """The report page of a sweep or dataset directory, as HTML text."""
-    best, history, dirs, config = load_sweep(source)
-    best = best.sort_values(["mechanism", "objective", "w_d", "seed"], kind="stable").reset_index(drop=True)
-    columns = [c for c in TABLE_COLUMNS if c in best.columns]
-    header = "".join(f"<th>{html.escape(c)}</th>" for c in [*columns, "files"])
+def _link(path: Path, base: Path) -> str:
+    """``path`` relative to the page's folder, as a URL (works after the folder is moved)."""
+    return quote(Path(os.path.relpath(Path(path).resolve(), base.resolve())).as_posix(), safe="/=,+")
+
+
+def optima_table(best: pd.DataFrame, dirs: dict[str, Path], base: Path) -> str:
+    """The sortable table of the optima, one row per run."""
+    designs = design_columns(best)
+    head = ["job", "mechanism", "objective", "w_d", "optimizer", "seed",
+            *[f"{n} [{u}]" for n, u in designs], "objective", "V", "GDI", "SURI", "gap to reference [%]",
+            "flat variables", "at bounds", "files"]
     rows = []
     for _, row in best.iterrows():
+        cells = [_cell(row.get("job")), _cell(row["mechanism"]), _cell(row["objective"]), _cell(row["w_d"]),
+                 _cell(row["optimizer"]), _cell(row["seed"])]
+        cells += [_cell(row.get(n)) for n, _ in designs]
+        unit = row.get("objective_unit", "")
+        value = row["objective_value"]
+        cells.append(_cell(f"{symbol(str(row['objective']))} = {value:.6g} {unit}".rstrip(), value))
+        cells.append(_cell(f"{row['volume']:.6g} {row.get('volume_unit', '')}", row["volume"]))
+        cells += [_cell(row.get("gdi")), _cell(row.get("suri"))]
+        gap = row.get("reference_gap")
+        gap = None if gap is None or pd.isna(gap) else 100 * float(gap)
+        cells.append(_cell(None if gap is None else f"{gap:.3g}", gap))
+        cells += [_cell(row.get("flat_variables", "")), _cell(row.get("at_bounds", ""))]
         run_dir = dirs.get(row["run_id"])
-        links = " ".join(f'<a href="{html.escape((run_dir / f"{t}.parquet").as_uri())}">{t}</a>'
+        links = " ".join(f'<a href="{_link(run_dir / f"{t}.parquet", base)}">{t}</a>'
                          for t in ("best", "history", "designs", "front")
                          if run_dir is not None and (run_dir / f"{t}.parquet").exists())
-        rows.append("<tr>" + "".join(f"<td>{_cell(row[c])}</td>" for c in columns) + f"<td>{links}</td></tr>")
+        cells.append(f"<td>{links}</td>")
+        rows.append(f'<tr title="{html.escape(str(row["run_id"]))}">' + "".join(cells) + "</tr>")
+    header = "".join(f"<th>{html.escape(h)}</th>" for h in head)
+    return (f'<div class="scroll"><table id="optima" class="sortable"><thead><tr>{header}</tr></thead>'
+            f"<tbody>{''.join(rows)}</tbody></table></div>")
+
+
+def seeds_table(best: pd.DataFrame) -> str:
+    """Runs per group: distinct seeds (statistics run over these) and repeats of one seed."""
+    rows = []
+    for key, frame in best.groupby(GROUP_KEYS, sort=True):
+        n_runs, n_seeds = len(frame), frame["seed"].nunique()
+        seeds = ", ".join(str(s) for s in sorted(frame["seed"].unique()))
+        rows.append("<tr>" + "".join(_cell(v) for v in (*key, n_runs, n_seeds, seeds, n_runs - n_seeds)) + "</tr>")
+    header = "".join(f"<th>{h}</th>" for h in (*GROUP_KEYS, "runs", "distinct seeds", "seeds",
+                                                  "repeats of a seed"))
+    return (f'<div class="scroll"><table class="sortable"><thead><tr>{header}</tr></thead>'
+            f"<tbody>{''.join(rows)}</tbody></table></div>"
+            '<p class="note">Means and ranges are over distinct seeds; a repeat (same study, same seed) '
+            "gives the same result and is counted once.</p>")
+
+
+def galleries(best: pd.DataFrame, dirs: dict[str, Path]) -> str:
+    """Workspace and 1/κ slices of the best designs of each mechanism, one colour scale per figure."""
+    parts = []
+    for name in sorted(best["mechanism"].astype(str).unique()):
+        rows = best[best["mechanism"].astype(str) == name].sort_values("objective_value", ascending=False)
+        rows = rows[[rid in dirs and (dirs[rid] / "workspace.png").exists() for rid in rows["run_id"]]]
+        rows = rows.head(MAX_WORKSPACES)
+        configs = {rid: (read_manifest(dirs[rid]) or {}).get("config") for rid in rows["run_id"]}
+        configs = {k: v for k, v in configs.items() if v}
+        for kind, alt in (("workspace", "workspace"), ("inverse_condition", "1/κ")):
+            data = workspace_gallery(rows, configs, kind)
+            if data:
+                parts.append(f"<figure>{_img(data, f'{alt} of the best {name} designs')}"
+                             f"<figcaption>{alt} of the best {name} designs: "
+                             f"{html.escape('; '.join(caption(r) for _, r in rows.iterrows()))}"
+                             f"</figcaption></figure>")
+    return "".join(parts)
+
+
+def build_report(source: Path, out: Path | None = None) -> str:
+    """The report page of a sweep or dataset directory, as HTML text (links relative to ``out``)."""
+    source = Path(source)
+    base = (Path(out) if out is not None else source / "report.html").parent
+    best, history, dirs, config = load_sweep(source)
+    best = best.sort_values(["mechanism", "objective", "w_d", "seed"], kind="stable").reset_index(drop=True)
     tradeoff = ""
     if (best["objective"].astype(str) == "mixed").any():
         with tempfile.TemporaryDirectory() as tmp:
             tradeoff = _file_img(plot_tradeoff(best, Path(tmp) / "tradeoff.png"), "trade-off")
-    fronts = "".join(_file_img(d / "pareto.png", f"Pareto front {rid}") for rid, d in dirs.items())
-    order = best.sort_values("objective_value", ascending=False)["run_id"]
-    workspaces = "".join(f"<figure>{_file_img(dirs[rid] / 'workspace.png', 'workspace')}"
-                         f"<figcaption>{html.escape(rid)}</figcaption></figure>"
-                         for rid in list(order)[:MAX_WORKSPACES]
-                         if rid in dirs and (dirs[rid] / "workspace.png").exists())
+    fronts = "".join(
+        f"<figure>{_file_img(d / 'pareto.png', 'Pareto front')}<figcaption>"
+        f"{html.escape(caption(best[best['run_id'] == rid].iloc[0]))}</figcaption></figure>"
+        for rid, d in dirs.items() if (d / "pareto.png").exists() and (best["run_id"] == rid).any())
     overrides = "".join(
-        f"<li><code>{html.escape(rid)}</code>: {html.escape(' '.join((read_manifest(d) or {}).get('overrides', [])))}</li>"
-        for rid, d in dirs.items())
-    generated = time.strftime("%Y-%m-%d %H:%M:%S")
+        f"<li>{html.escape(caption(row))}: <code>"
+        f"{html.escape(' '.join((read_manifest(dirs[row['run_id']]) or {}).get('overrides', [])) or '(none)')}"
+        f"</code></li>" for _, row in best.iterrows() if row["run_id"] in dirs)
+    style = (STATIC / "report.css").read_text()
+    script = (STATIC / "report.js").read_text()
+    title = html.escape(source.resolve().name)
     return f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>pm-design report: {html.escape(Path(source).name)}</title>
-<style>
-body {{ font-family: system-ui, sans-serif; margin: 2em; color: #222; }}
-table {{ border-collapse: collapse; font-size: 13px; }} th, td {{ border: 1px solid #ccc; padding: 3px 6px; }}
-th {{ background: #eef; cursor: pointer; position: sticky; top: 0; }} tr:nth-child(even) {{ background: #f8f8f8; }}
-img {{ max-width: 100%; }} figure {{ display: inline-block; width: 31%; margin: 0.5%; }}
-pre {{ background: #f4f4f4; padding: 1em; max-height: 20em; overflow: auto; }}
-</style></head><body>
-<h1>pm-design report: {html.escape(str(source))}</h1>
-<p>{len(best)} complete runs; generated {generated}. Click a column header to sort.</p>
-<h2>Optima</h2>
-<table id="optima"><thead><tr>{header}</tr></thead><tbody>{''.join(rows)}</tbody></table>
+<html lang="en"><head><meta charset="utf-8">
+<meta name="viewport" content="width=device-width, initial-scale=1">
+<title>pm-design report: {title}</title>
+<style>{style}</style></head><body>
+<h1>pm-design report: {title}</h1>
+<p>{len(best)} complete runs; generated {time.strftime("%Y-%m-%d %H:%M:%S")}. Click a column header to sort;
+scroll or click a figure to zoom (drag to pan, double-click to reset). Hover a row for its run id.</p>
+<h2>Optima</h2>{optima_table(best, dirs, base)}
+<h2>Runs and seeds</h2>{seeds_table(best)}
 <h2>Trade-off</h2>{tradeoff or '<p>No mixed-index runs.</p>'}
 <h2>Convergence</h2>{_img(convergence_figure(best, history), 'convergence')}
-{'<h2>Pareto fronts</h2>' + fronts if fronts else ''}
-<h2>Workspaces of the best designs</h2>{workspaces or '<p>No figures (plot.enabled=false).</p>'}
+{'<h2>Pareto fronts</h2><div class="gallery">' + fronts + '</div>' if fronts else ''}
+<h2>Workspaces of the best designs</h2>{galleries(best, dirs) or '<p>No figures (plot.enabled=false).</p>'}
 <h2>Configuration</h2><pre>{html.escape(config)}</pre><ul>{overrides}</ul>
-<script>
-document.querySelectorAll("#optima th").forEach(function (th, col) {{
-  th.addEventListener("click", function () {{
-    var body = document.querySelector("#optima tbody");
-    var rows = Array.prototype.slice.call(body.rows);
-    var up = th.dataset.up !== "1"; th.dataset.up = up ? "1" : "0";
-    rows.sort(function (a, b) {{
-      var x = a.cells[col].textContent, y = b.cells[col].textContent;
-      var nx = parseFloat(x), ny = parseFloat(y);
-      var c = (!isNaN(nx) && !isNaN(ny)) ? nx - ny : x.localeCompare(y);
-      return up ? c : -c;
-    }});
-    rows.forEach(function (r) {{ body.appendChild(r); }});
-  }});
-}});
-console.log("pm-design report ready: " + document.querySelectorAll("#optima tbody tr").length + " runs");
-</script>
+<script>{script}</script>
 </body></html>
 """
 
@@ -180,7 +226,12 @@ def write_report(source: Path, out: Path | None = None) -> Path:
     from pipeline.store.parquet import write_text
 
     out = Path(out) if out is not None else Path(source) / "report.html"
-    return write_text(out, build_report(source))
+    text = build_report(source, out)
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise RunError(f"cannot write {out}: {exc.strerror or exc}") from None
+    return write_text(out, text)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -196,6 +247,8 @@ def main(argv: list[str] | None = None) -> int:
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    except RunError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
     print(json.dumps({"report": str(path)}))
     return 0
-

@@ -56,7 +56,7 @@ def extensions(r: Reproduction, h4_sweep_table: pd.DataFrame, best_runs: dict[st
     # sensitivity of the GDI to the homogenising length
     sens_rows = []
     b = best_runs["Table 3 (w_d = 0.5)"]
-    h4 = get_mechanism("h4", d=b["param_d"], h=b["param_h"], Qz=b["param_Qz"])
+    h4 = get_mechanism("h4", d=b["param_d_cm"], h=b["param_h_cm"], Qz=b["param_Qz_cm"])
     tri = get_mechanism("tricept", a=250.0, b=400.0, d=100.0)
     for mech, label in ((h4, "H4 (w_d = 0.5 optimum)"), (tri, "Tricept (a, b, d) = (250, 400, 100)")):
         for factor in (0.25, 0.5, 1.0, 2.0, 4.0):

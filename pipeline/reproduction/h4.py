@@ -121,8 +121,8 @@ def h4_tables(r: Reproduction) -> tuple[dict[str, pd.DataFrame], dict[str, pd.Se
     for label, frame in frames.items():
         best_runs[label] = frame.iloc[int(np.argmax(frame["objective_value"]))]
         p = H4_PAPER[label]
-        for key, column in (("V", "volume"), ("gdi", "gdi"), ("d", "param_d"), ("h", "param_h"),
-                            ("Qz", "param_Qz")):
+        for key, column in (("V", "volume"), ("gdi", "gdi"), ("d", "param_d_cm"), ("h", "param_h_cm"),
+                            ("Qz", "param_Qz_cm")):
             vals = frame[column].to_numpy()
             rows.append([label, "ic" if key == "gdi" else key, p[key], f"{vals.mean():.4g} ± {vals.std():.2g}",
                          rel(vals.mean(), p[key])])
@@ -186,7 +186,7 @@ def workspace_pngs(d: float, h: float, Qz: float) -> dict[str, bytes]:
 def h4_figures(r: Reproduction, frames: dict[str, pd.DataFrame], best_runs: dict[str, pd.Series]) -> None:
     """Section "Fig. 5-7": Table 1's best optimum's workspace, and the GA history of its seed 0."""
     b = best_runs["Table 1 (max V)"]
-    r.cached_figures(workspace_pngs, float(b["param_d"]), float(b["param_h"]), float(b["param_Qz"]))
+    r.cached_figures(workspace_pngs, float(b["param_d_cm"]), float(b["param_h_cm"]), float(b["param_Qz_cm"]))
     history = r.table("history", [frames["Table 1 (max V)"]["run_id"].iloc[0]])
     plot_convergence(history, r.figures / "h4_fig7_convergence.png", "paper GA convergence (H4, max V, seed 0)",
                      "V [cm³·rad]")

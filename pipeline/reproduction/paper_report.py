@@ -28,8 +28,9 @@ import pandas as pd
 from pipeline.errors import ConfigError
 from pipeline.reproduction.papers import load_paper, paper_names
 from pipeline.report.tables import rel, table
+from pipeline.store.parquet import PARAM_UNITS
 
-#: printed quantity -> dataset column (design variables: ``param_<name>``)
+#: printed quantity -> dataset column (design quantities: :func:`_design_column`)
 QUANTITIES = {"V": "volume", "gdi": "gdi", "lci_min": "inverse_condition_min", "lci_max": "inverse_condition_max"}
 
 
@@ -39,6 +40,15 @@ def _matching(best: pd.DataFrame, mechanism: str, row: dict) -> pd.DataFrame:
     if row.get("w_d") is not None:
         runs = runs[np.isclose(runs["w_d"].astype(float), float(row["w_d"]), rtol=0.0, atol=1e-9)]
     return runs
+
+
+def _design_column(best: pd.DataFrame, name: str) -> str:
+    """The column of a printed design quantity: the design variable itself, else the mechanism
+    parameter ``param_<name>_<unit>`` (the paper's unit: H4 cm, Tricept mm; pipeline.store.parquet)."""
+    if name in best.columns:
+        return name
+    return next((c for c in best.columns if c == f"param_{name}" or
+                 (c.startswith(f"param_{name}_") and c[len(f"param_{name}_"):] in PARAM_UNITS)), f"param_{name}")
 
 
 def compare(best: pd.DataFrame, paper: dict) -> list[list]:
@@ -58,7 +68,7 @@ def compare(best: pd.DataFrame, paper: dict) -> list[list]:
         if runs.empty:
             out.append([row["table"], "-", 0, "-", "-", "no runs in the dataset", "-"])
             continue
-        quantities = {**QUANTITIES, **{k: f"param_{k}" for k in row
+        quantities = {**QUANTITIES, **{k: _design_column(best, k) for k in row
                                        if k not in (*QUANTITIES, "table", "objective", "w_d")}}
         for optimizer, group in runs.groupby("optimizer", sort=True):
             for key, column in quantities.items():

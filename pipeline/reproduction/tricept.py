@@ -34,10 +34,10 @@ def tricept(r: Reproduction) -> None:
                      f"{grid.inverse_condition_min:.2f}-{grid.inverse_condition_max:.2f}"])
     runs = r.experiment("tricept_table2")
     best = runs.iloc[int(np.argmax(runs["objective_value"]))]
-    opt = get_mechanism("tricept", a=best["param_a"], b=best["param_b"], d=best["param_d"])
+    opt = get_mechanism("tricept", a=best["a"], b=best["b"], d=best["d"])
     grid = r.memo(evaluate)(opt, resolution=48, error_estimate=False)
     polar = r.memo(evaluate)(opt, method="polar", resolution=32, error_estimate=False)
-    rows.append([f"our GA optimum (a={best['param_a']:.1f}, b={best['param_b']:.1f}, d={best['param_d']:.1f})",
+    rows.append([f"our GA optimum (a={best['a']:.1f}, b={best['b']:.1f}, d={best['d']:.1f})",
                  "-", f"{grid.volume:.1f}", f"{polar.volume:.1f}", "-",
                  f"{grid.inverse_condition_min:.2f}-{grid.inverse_condition_max:.2f}"])
     spread = [f"{v:.1f}" for v in runs["volume"]]

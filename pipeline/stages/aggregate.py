@@ -131,7 +131,9 @@ def _locked(dataset_dir: Path):
 
 def _run_tables(run: Path, manifest: dict, best: pa.Table) -> dict[str, pa.Table]:
     """The run's tables with its ids as leading columns, and its ``runs`` row (``best``: already read)."""
-    ids = {"run_id": manifest["run_id"], "launch_id": manifest["launch_id"], "job": int(manifest["job"])}
+    ids = {"run_id": manifest["run_id"], "launch_id": manifest["launch_id"], "job": int(manifest["job"]),
+           # runs recorded before the field existed were made as studies
+           "purpose": str((manifest.get("config") or {}).get("purpose", "study"))}
     out = {}
     for table in TABLES:
         path = run / f"{table}.parquet"

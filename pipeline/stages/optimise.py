@@ -33,6 +33,7 @@ from pipeline.objectives import EVALUATION_FIELDS, OBJECTIVES, objective_values
 from pipeline.optimizers import OPTIMIZERS, REFERENCE_OPTIMIZER, OptimizerConfig, Problem, reference_optimum
 from pipeline.optimizers.polish import polish
 from pipeline.optimizers.sensitivity import flat_intervals
+from pipeline.store.parquet import param_column
 
 log = logging.getLogger(__name__)
 
@@ -136,8 +137,9 @@ def _best_row(mechanism: MechanismConfig, resolution: int | None, refine_factor:
                                  for n, v, lo, hi in zip(names, x, lower, upper) if v <= lo or v >= hi)
     mech = mechanism.build(x)
     for key, v in mech.params().items():
-        if isinstance(v, (int, float, str)) and not isinstance(v, bool):
-            best[f"param_{key}"] = v
+        # a design variable's own column already holds it (Tricept a, b, d; 2-RPR b, q_min)
+        if isinstance(v, (int, float, str)) and not isinstance(v, bool) and key not in names:
+            best[param_column(key, mech.param_unit(key, v))] = v
     base = evaluation_frame(rows(x[None, :])).iloc[0]
     res = resolution or default_resolution(mech, mechanism.orientation_rad())
     refined_rows = DesignEvaluator(mechanism, res * refine_factor, 1).evaluate(x[None, :])

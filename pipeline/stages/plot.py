@@ -17,6 +17,7 @@ change the backend of a notebook.
 from __future__ import annotations
 
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -68,37 +69,76 @@ def run_figures(mechanism, objective, optimizer, plot, optimum: dict) -> dict[st
     ``mechanism``, ``objective``, ``optimizer`` and ``plot`` are the run's
     config sections (``pipeline.config``); ``optimum`` the optimise stage's result.
     """
-    design = [optimum["best"][n] for n in mechanism.design.names]
+    best = optimum["best"]
+    design = [best[n] for n in mechanism.design.names]
     mech = mechanism.build(design)
     orientation = mechanism.orientation_rad() or mech.default_orientation
     what = f"{mech.name}, {objective.name}" + (f", w_d = {objective.w_d:g}" if objective.name == "mixed" else "")
-    unit = optimum["best"]["objective_unit"]
+    what += f", seed {optimizer.seed}"
+    unit = best["objective_unit"]
+    design_volume = f"design's V = {best['volume']:.6g} {best['volume_unit']}"
     with tempfile.TemporaryDirectory() as tmp:
         directory = Path(tmp)
         plot_convergence(optimum["history"], directory / "convergence.png",
-                         f"{optimizer.name} convergence ({what})", f"{symbol(objective.name)} [{unit}]", plot)
-        plot_workspace(mech, orientation, mechanism.min_inverse_condition, mechanism.length, directory, what, plot)
+                         f"{optimizer.name} convergence ({what})", f"{symbol(objective.name)} [{unit}]", plot,
+                         reference=best.get("reference_value"))
+        plot_workspace(mech, orientation, mechanism.min_inverse_condition, mechanism.length, directory, what, plot,
+                       design_volume=design_volume)
         if optimum["front"] is not None:
-            plot_front(optimum["front"], list(optimizer.objectives), directory / "pareto.png", what, plot)
+            units = {"volume": best["volume_unit"]}
+            plot_front(optimum["front"], list(optimizer.objectives), directory / "pareto.png", what, plot, units)
         return {p.name: p.read_bytes() for p in sorted(directory.iterdir()) if not p.name.startswith(".")}
 
 
-def plot_convergence(history: pd.DataFrame, path: Path, title: str, ylabel: str, plot=None) -> Path:
-    """Best and mean objective per generation (seed 000 Fig. 7)."""
+def plot_convergence(history: pd.DataFrame, path: Path, title: str, ylabel: str, plot=None,
+                     reference: float | None = None) -> Path:
+    """Best and mean objective per generation (seed 000 Fig. 7), with the reference optimum.
+
+    ``reference`` (the objective's unit): the reference optimum (CMA-ES + polish,
+    :mod:`pipeline.stages.optimise`), drawn as a horizontal line with the final gap
+    ``(reference - best) / |reference|`` in percent; None or NaN: not run.
+    """
     fig, (ax,) = _figure(6, 4)
     ax.plot(history["generation"], history["best"], label="best")
     ax.plot(history["generation"], history["mean"], label="population mean", alpha=0.7)
-    ax.set_xlabel("generation")
+    if reference is not None and np.isfinite(reference):
+        final = float(history["best"].iloc[-1])
+        gap = 100 * (reference - final) / abs(reference) if reference else float("nan")
+        ax.axhline(reference, color="k", ls="--", lw=1,
+                   label=f"reference optimum {reference:.6g} (gap {gap:.3g} %)")
+    ax.set_xlabel("generation [1]")
     ax.set_ylabel(ylabel)
     ax.set_title(title)
-    ax.legend(loc="lower right")
+    ax.legend(loc="lower right", fontsize=8)
     ax.grid(alpha=0.3)
     return _save(fig, path, plot)
 
 
-def plot_workspace(mech: Mechanism, orientation: tuple[float, float], min_ic: float, length: float | None,
-                   directory: Path, what: str, plot=None) -> list[Path]:
-    """``workspace.png`` and ``inverse_condition.png`` of one design on its plot slice."""
+@dataclass
+class Slice:
+    """A 2-D slice of one design's workspace, as drawn by :func:`plot_workspace`.
+
+    ``x``, ``y``: sample coordinates on the plotted axes (the mechanism's units,
+    rad for angles); ``extent``: height of the exactly integrated axis (H4: z
+    extent, length unit) or None; ``inverse_condition``: 1/κ; both NaN outside.
+    """
+
+    x: np.ndarray
+    y: np.ndarray
+    extent: np.ndarray | None
+    inverse_condition: np.ndarray
+    inside: np.ndarray
+    xlabel: str
+    ylabel: str
+    extent_label: str
+    fixed_label: str
+    equal_aspect: bool
+
+
+def workspace_slice(mech: Mechanism, orientation: tuple[float, float], min_ic: float,
+                    length: float | None) -> Slice:
+    """The mechanism's plot slice (``Mechanism.plot_slice``) of one design, sampled on a
+    :data:`SLICE_RESOLUTION` grid (orientation in rad, ``length`` in the length unit)."""
     fixed, (i, j), _ = mech.plot_slice(orientation)
     label = ", ".join(f"{symbol(n)} = {np.degrees(v):.1f}°" if mech.angular[mech.pose_names.index(n)]
                       else f"{symbol(n)} = {v:.4g} {mech.length_unit}" for n, v in fixed.items())
@@ -107,64 +147,101 @@ def plot_workspace(mech: Mechanism, orientation: tuple[float, float], min_ic: fl
     pts, inside = ev.samples, ev.inside
     names = mech.pose_names
     axis_label = [f"{symbol(n)} [{'rad' if mech.angular[k] else mech.length_unit}]" for k, n in enumerate(names)]
-    cell = [(pts[:, k].max() - pts[:, k].min()) / max(SLICE_RESOLUTION - 1, 1) for k in (i, j)]
+    extent = None if ev.extent is None else np.where(inside, ev.extent[:, 1] - ev.extent[:, 0], np.nan)
+    return Slice(x=pts[:, i], y=pts[:, j], extent=extent,
+                 inverse_condition=np.where(inside, ev.inverse_conditions, np.nan), inside=inside,
+                 xlabel=axis_label[i], ylabel=axis_label[j],
+                 extent_label=(f"{symbol(names[2])} extent [{mech.length_unit}]" if len(names) > 2
+                               else f"extent [{mech.length_unit}]"),
+                 fixed_label=label, equal_aspect=mech.angular[i] == mech.angular[j])
+
+
+def draw_slice(fig: Figure, ax, data: Slice, kind: str, vmin: float | None = None, vmax: float | None = None,
+               colorbar: bool = True):
+    """Draw ``kind`` ("workspace" or "inverse_condition") of ``data`` on ``ax``; returns the mesh.
+
+    ``vmin``/``vmax`` fix the colour scale (one scale for a family of figures).
+    """
+    if kind == "workspace" and data.extent is not None:
+        values, bar, cmap = data.extent, data.extent_label, "viridis"
+    elif kind == "workspace":
+        values, bar, cmap = np.where(data.inside, 1.0, np.nan), None, ListedColormap(["tab:blue"])
+    else:
+        values, bar, cmap = data.inverse_condition, "1/κ [1]", "magma"
+        vmin = 0.0 if vmin is None else vmin
+    # one rectangle per grid cell: visible at any resolution and any axis scale
+    mesh = _cells(ax, data.x, data.y, values, cmap, vmin=vmin, vmax=vmax)
+    if bar and colorbar:
+        fig.colorbar(mesh, ax=ax, label=bar)
+    ax.set_xlabel(data.xlabel)
+    ax.set_ylabel(data.ylabel)
+    if data.equal_aspect:
+        ax.set_aspect("equal")
+    return mesh
+
+
+def plot_workspace(mech: Mechanism, orientation: tuple[float, float], min_ic: float, length: float | None,
+                   directory: Path, what: str, plot=None, design_volume: str = "") -> list[Path]:
+    """``workspace.png`` and ``inverse_condition.png`` of one design on its plot slice.
+
+    The title names the slice (the fixed pose variables) and, when given,
+    ``design_volume``: the design's workspace volume over the whole pose space
+    (e.g. "design's V = 1.457e+05 cm³·rad"); the slice's own area is not the design's V.
+    """
+    data = workspace_slice(mech, orientation, min_ic, length)
     out = []
-    panels = [("workspace", None), ("inverse_condition", ev.inverse_conditions)]
-    for name, values in panels:
+    for name in ("workspace", "inverse_condition"):
         fig, (ax,) = _figure(6, 5)
-        if name == "workspace" and ev.extent is not None:
-            values = np.where(inside, ev.extent[:, 1] - ev.extent[:, 0], np.nan)
-            bar = f"{symbol(names[2])} extent [{mech.length_unit}]" if len(names) > 2 else "extent"
-            cmap = "viridis"
-        elif name == "workspace":
-            values = np.where(inside, 1.0, np.nan)
-            bar, cmap = None, ListedColormap(["tab:blue"])
-        else:
-            values = np.where(inside, values, np.nan)
-            bar, cmap = "1/κ", "magma"
-        # one rectangle per grid cell: visible at any resolution and any axis scale
-        mesh = _cells(ax, pts[:, i], pts[:, j], values, cell, cmap, vmin=0 if name != "workspace" else None)
-        if bar:
-            fig.colorbar(mesh, ax=ax, label=bar)
-        ax.set_xlabel(axis_label[i])
-        ax.set_ylabel(axis_label[j])
+        draw_slice(fig, ax, data, name)
         kind = "workspace" if name == "workspace" else "1/κ"
-        ax.set_title(f"{kind}, {what}" + (f"\n{label}" if label else "")
-                     + (f"; V = {ev.volume:.4g} {ev.volume_unit}" if name == "workspace" else ""))
-        if mech.angular[i] == mech.angular[j]:
-            ax.set_aspect("equal")
+        where = f"slice {data.fixed_label}" if data.fixed_label else "whole workspace"
+        ax.set_title(f"{kind}, {what}\n{where}" + (f"; {design_volume}" if design_volume else ""), fontsize=10)
         out.append(_save(fig, Path(directory) / f"{name}.png", plot))
     return out
 
 
-def _cells(ax, x: np.ndarray, y: np.ndarray, values: np.ndarray, cell: list[float], cmap: str, vmin=None):
+def _cells(ax, x: np.ndarray, y: np.ndarray, values: np.ndarray, cmap, vmin=None, vmax=None):
     """Regular grid samples as a pcolormesh (NaN transparent)."""
     xs, ys = np.unique(np.round(x, 12)), np.unique(np.round(y, 12))
     grid = np.full((ys.size, xs.size), np.nan)
     grid[np.searchsorted(ys, np.round(y, 12)), np.searchsorted(xs, np.round(x, 12))] = values
-    return ax.pcolormesh(xs, ys, np.ma.masked_invalid(grid), cmap=cmap, vmin=vmin, shading="nearest")
+    return ax.pcolormesh(xs, ys, np.ma.masked_invalid(grid), cmap=cmap, vmin=vmin, vmax=vmax, shading="nearest")
 
 
-def plot_front(front: pd.DataFrame, objectives: list[str], path: Path, what: str, plot=None) -> Path:
-    """The non-dominated designs of a Pareto optimiser in the plane of its two objectives."""
+def plot_front(front: pd.DataFrame, objectives: list[str], path: Path, what: str, plot=None,
+               units: dict[str, str] | None = None) -> Path:
+    """The non-dominated designs of a Pareto optimiser in the plane of its two objectives
+    (``units``: unit of an objective other than "1", e.g. ``{"volume": "cm³·rad"}``)."""
+    units = units or {}
     fig, (ax,) = _figure(6, 4.5)
     a, b = objectives
     order = np.argsort(front[a].to_numpy())
     ax.plot(front[a].to_numpy()[order], front[b].to_numpy()[order], "o-", ms=4)
-    ax.set_xlabel(f"{symbol(a)} [1]" if a != "volume" else "V")
-    ax.set_ylabel(f"{symbol(b)} [1]" if b != "volume" else "V")
-    ax.set_title(f"Pareto front, {what}")
+    ax.set_xlabel(f"{symbol(a)} [{units.get(a, '1')}]")
+    ax.set_ylabel(f"{symbol(b)} [{units.get(b, '1')}]")
+    ax.set_title(f"Pareto front of {symbol(a)} and {symbol(b)}, {what}")
     ax.grid(alpha=0.3)
     return _save(fig, path, plot)
+
+
+def distinct_seeds(best: pd.DataFrame, keys: list[str]) -> pd.DataFrame:
+    """One row per (``keys``, seed): repeats of one seed (the same study run again, which gives
+    the same result) are counted once, so statistics are over distinct seeds only."""
+    if "seed" not in best.columns:
+        return best
+    return best.drop_duplicates([*keys, "seed"], keep="first")
 
 
 def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
     """GDI, SURI and η of the mixed-index optima versus w_d, one panel per mechanism (seed 000 Fig. 8).
 
-    Runs with the same (mechanism, w_d) (seeds, repeats) are drawn as the mean
-    with a band from their minimum to maximum.
+    Runs with the same (mechanism, optimiser, w_d) and different seeds are drawn as
+    the mean with a band from their minimum to maximum; repeats of one seed count once
+    (:func:`distinct_seeds`).
     """
     mixed = best[best["objective"].astype(str) == "mixed"]
+    keys = [k for k in ("mechanism", "optimizer", "w_d") if k in mixed.columns]
+    mixed = distinct_seeds(mixed, keys)
     mechanisms = sorted(mixed["mechanism"].astype(str).unique()) or ["none"]
     fig, axes = _figure(4.5 * len(mechanisms), 3.8, len(mechanisms))
     for ax, name in zip(axes, mechanisms):
@@ -176,12 +253,14 @@ def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
                 w = stats.index.to_numpy()
                 ax.plot(w, stats[(column, "mean")], style, label=label, ms=4)
                 ax.fill_between(w, stats[(column, "min")], stats[(column, "max")], alpha=0.2)
-        n_runs = part.groupby("w_d").size()
+        n_seeds = part.groupby("w_d").size()
         ax.set_xlabel("$w_d$ [1]")
-        ax.set_ylabel("index [1]")
+        ax.set_ylabel("GDI, SURI, η [1]")
         ax.grid(alpha=0.3)
         if len(stats):
-            ax.set_title(f"{name}: optima vs $w_d$ (runs per point: {n_runs.max()})")
+            spread = (f"mean and range over {n_seeds.max()} seeds" if n_seeds.max() > 1
+                      else "one seed per point")
+            ax.set_title(f"{name}: GDI, SURI, η of the optima vs $w_d$\n({spread})", fontsize=10)
             ax.legend(loc="best")
         else:  # a sweep of V or GDI alone: say so rather than draw an empty legend
             ax.set_title("the mixed index η versus $w_d$")

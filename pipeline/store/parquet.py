@@ -1,9 +1,27 @@
 """Parquet I/O: atomic writes, the config in the schema metadata, units in the field metadata.
 
 :data:`COLUMNS` is the column dictionary of every table (README prints it):
-unit and meaning. Design variables and ``param_*`` columns take their unit
-from the mechanism (passed as ``units``). Each file's schema metadata holds
-the resolved config (JSON), the package version and the git commit.
+unit and meaning. Each file's schema metadata holds the resolved config
+(JSON), the package version and the git commit.
+
+Units rule (one unit per column, whatever mechanisms a dataset mixes)
+---------------------------------------------------------------------
+* a column whose unit would depend on the mechanism carries the unit in its
+  name: mechanism parameters are ``param_<name>_<unit>`` (``param_d_cm`` for
+  H4's d, ``param_q_min_mm``, ``param_cone_deg``; no suffix for readings and
+  unitless numbers), so H4's cm and Tricept's mm never share a column;
+* design variables keep their names (``d_ratio``, ``a``, ...); each name
+  belongs to one mechanism or has the same unit wherever it occurs (tested);
+  a constructor parameter that *is* a design variable is not repeated as
+  ``param_*``;
+* the workspace volume's *dimension* differs between mechanisms (H4 cm³·rad
+  over (x, y, z, θ), Tricept mm·rad², 2-RPR mm²), so no one unit exists:
+  ``volume``, ``volume_refined``, ``reference_volume`` are in the row's
+  ``volume_unit`` and objective values in ``objective_unit``; compare volumes
+  within one mechanism;
+* every other column has one fixed unit (``COLUMNS``), stored in the Arrow
+  field metadata (``unit``, ``description``) and, read back with
+  :func:`pipeline.store.dataset.read_dataset`, in ``DataFrame.attrs["units"]``.
 """
 
 from __future__ import annotations
@@ -38,6 +56,8 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "w_d": ("1", "weight of the GDI in eta = w_d GDI + (1 - w_d) SURI (seed 000 eq. 36)"),
     "optimizer": ("", "optimiser registry name"),
     "seed": ("", "optimiser seed"),
+    "purpose": ("", "why the run was made: study, debug (+debug presets) or benchmark (dataset only; "
+                    "read_dataset leaves debug runs out unless asked)"),
     "design_id": ("", "index of the sampled design"),
     "generation": ("", "generation (0 = initial population)"),
     "best": ("objective_unit", "best objective value in the population"),
@@ -70,6 +90,7 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "reference_gap": ("1", "(reference_value - objective_value) / reference_value: how far the run stops "
                            "short of the reference optimum; null if no reference was run"),
     "flat_variables": ("", "design variables along which the objective is flat at the optimum (the optimum is a set)"),
+    "eta": ("1", "mixed index eta = w_d GDI + (1 - w_d) SURI at the row's w_d (seed 000 eq. 36)"),
     "status": ("", "run status from its manifest: complete"),
     "wall_time": ("s", "wall time of the run"),
     "source": ("", "run directory the dataset row was read from"),
@@ -106,9 +127,26 @@ def column_unit(name: str, units: dict[str, str] | None = None) -> tuple[str, st
         if name.endswith(suffix) and name[: -len(suffix)] in units:
             return units[name[: -len(suffix)]], meaning
     if name.startswith("param_"):
-        return ("mechanism unit", "mechanism constructor parameter (lengths in the mechanism's unit, cm for H4 "
-                "and mm otherwise; angles in deg; readings as names)")
+        stem = name[len("param_"):]
+        for unit in PARAM_UNITS:
+            if stem.endswith(f"_{unit}"):
+                return unit, f"mechanism constructor parameter {stem[: -len(unit) - 1]} ({unit})"
+        return "", f"mechanism constructor parameter {stem} (a reading's name or a unitless number)"
     return "", ""
+
+
+#: units a ``param_*`` column name can end with (:func:`param_column`)
+PARAM_UNITS = ("cm", "mm", "m", "deg")
+
+
+def param_column(name: str, unit: str) -> str:
+    """Dataset column of mechanism parameter ``name`` in ``unit`` (units rule of this module):
+    ``param_d_cm``; ``param_base`` for a reading or a unitless number (unit "" or "1")."""
+    if unit in ("", "1"):
+        return f"param_{name}"
+    if unit not in PARAM_UNITS:
+        raise ValueError(f"parameter {name!r}: unit {unit!r} is not one of {', '.join(PARAM_UNITS)}")
+    return f"param_{name}_{unit}"
 
 
 def to_table(df: pd.DataFrame, units: dict[str, str] | None = None) -> pa.Table:

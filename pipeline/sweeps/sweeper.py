@@ -184,3 +184,5 @@ class CheckedSweeper(BasicSweeper):
         if failed:
             _fail(f"{summary}; failed: {'; '.join(failed)}", 1)
         log.info("%s; dataset %s", summary, self.config.paths.dataset_dir)
+        print(f"sweep: {sweep_dir}\nreport: {sweep_dir / 'report.html'}\n"
+              f"dataset: {self.config.paths.dataset_dir} (pipeline.read_dataset({str(self.config.paths.dataset_dir)!r}))")

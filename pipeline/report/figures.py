@@ -1,0 +1,123 @@
+"""The report's figures: convergence per group of runs, and workspace galleries on one colour scale.
+
+Each returns a PNG as base64 text (embedded in ``report.html``). Groups of runs
+are (mechanism, objective, w_d, optimizer); statistics run over *distinct seeds*
+(:func:`pipeline.stages.plot.distinct_seeds`): a study run again with the same
+seed is a repeat, not a new sample.
+"""
+
+from __future__ import annotations
+
+import base64
+import io
+import logging
+
+import numpy as np
+import pandas as pd
+
+from pipeline.config import DesignSpace, MechanismConfig
+from pipeline.stages.plot import _figure, distinct_seeds, draw_slice, symbol, workspace_slice
+
+log = logging.getLogger(__name__)
+
+GROUP_KEYS = ["mechanism", "objective", "w_d", "optimizer"]
+
+
+def png(fig) -> str:
+    """A figure as base64 PNG text."""
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=110)
+    return base64.b64encode(buffer.getvalue()).decode()
+
+
+def caption(row: pd.Series) -> str:
+    """What a run is, in words: mechanism, objective (w_d), optimiser, seed."""
+    what = f"{row['mechanism']}, {row['objective']}"
+    if str(row["objective"]) == "mixed":
+        what += f", w_d = {float(row['w_d']):g}"
+    return f"{what}, {row['optimizer']}, seed {int(row['seed'])}"
+
+
+def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
+    """Best objective per generation, one line per group: mean and range over distinct seeds,
+    with the group's reference optimum (dashed, where one was run) and the final gap in percent."""
+    runs = distinct_seeds(best, GROUP_KEYS)
+    groups = runs[["run_id", *GROUP_KEYS]].merge(history[["run_id", "generation", "best"]], on="run_id")
+    by_objective = sorted(groups["objective"].astype(str).unique())
+    fig, axes = _figure(5.5 * max(len(by_objective), 1), 4, max(len(by_objective), 1))
+    for ax, objective in zip(axes, by_objective):
+        part = groups[groups["objective"].astype(str) == objective]
+        for key, frame in part.groupby(GROUP_KEYS, sort=True):
+            stats = frame.groupby("generation")["best"].agg(["mean", "min", "max"])
+            n_seeds = frame["run_id"].nunique()
+            label = f"{key[0]}, {key[3]}" + (f", w_d={key[2]:g}" if objective == "mixed" else "")
+            label += f" ({n_seeds} seed{'s' if n_seeds > 1 else ''})"
+            line, = ax.plot(stats.index, stats["mean"], label=label)
+            ax.fill_between(stats.index, stats["min"], stats["max"], alpha=0.2, color=line.get_color())
+            ref = runs.loc[runs["run_id"].isin(frame["run_id"].unique()), "reference_value"] \
+                if "reference_value" in runs else pd.Series(dtype=float)
+            ref = ref.dropna()
+            if len(ref):
+                reference = float(ref.max())
+                gap = 100 * (reference - stats["mean"].iloc[-1]) / abs(reference) if reference else np.nan
+                ax.axhline(reference, ls="--", lw=1, color=line.get_color(),
+                           label=f"reference {reference:.4g} (gap {gap:.2g} %)")
+        ax.set_xlabel("generation [1]")
+        unit = best.loc[best["objective"].astype(str) == objective, "objective_unit"].iloc[0]
+        ax.set_ylabel(f"{symbol(objective)} [{unit}]")
+        ax.set_title(f"convergence of {symbol(objective)}: best per generation\n"
+                     f"(mean and range over distinct seeds; dashed: reference optimum)", fontsize=10)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7, loc="lower right")
+    return png(fig)
+
+
+def _mechanism_config(config: dict) -> MechanismConfig:
+    m = dict(config["mechanism"])
+    m["design"] = DesignSpace(**m["design"])
+    return MechanismConfig(**m)
+
+
+def workspace_gallery(rows: pd.DataFrame, configs: dict[str, dict], kind: str, columns: int = 3) -> str:
+    """The plot slices of ``rows`` (one mechanism; best first) side by side on ONE colour scale.
+
+    ``kind``: "workspace" (H4: z extent) or "inverse_condition" (1/κ from 0);
+    ``configs``: each run's resolved config (its manifest), by run id.
+    """
+    slices, titles = [], []
+    for _, row in rows.iterrows():
+        config = configs.get(row["run_id"])
+        if config is None:
+            continue
+        mc = _mechanism_config(config)
+        mech = mc.build([row[n] for n in mc.design.names])
+        slices.append(workspace_slice(mech, mc.orientation_rad() or mech.default_orientation,
+                                      mc.min_inverse_condition, mc.length))
+        titles.append(f"{caption(row)}\n{symbol(str(row['objective']))} = {row['objective_value']:.4g}")
+    if not slices:
+        return ""
+    values = [s.inverse_condition if kind == "inverse_condition" else s.extent for s in slices]
+    finite = [v[np.isfinite(v)] for v in values if v is not None]
+    finite = [v for v in finite if v.size]
+    vmin = 0.0 if kind == "inverse_condition" else (min(v.min() for v in finite) if finite else None)
+    vmax = max(v.max() for v in finite) if finite else None
+    ncols = min(columns, len(slices))
+    nrows = -(-len(slices) // ncols)
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(4.2 * ncols + 1.0, 3.8 * nrows), layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = np.atleast_1d(fig.subplots(nrows, ncols, squeeze=False).ravel())
+    mesh = None
+    for ax, data, title in zip(axes, slices, titles):
+        mesh = draw_slice(fig, ax, data, kind, vmin=vmin, vmax=vmax, colorbar=False)
+        ax.set_title(title, fontsize=8)
+    for ax in axes[len(slices):]:
+        ax.set_axis_off()
+    label = "1/κ [1]" if kind == "inverse_condition" else slices[0].extent_label
+    if mesh is not None and (kind == "inverse_condition" or slices[0].extent is not None):
+        fig.colorbar(mesh, ax=list(axes[: len(slices)]), label=f"{label} (one scale for all panels)")
+    where = f"slice {slices[0].fixed_label}" if slices[0].fixed_label else "whole workspace"
+    fig.suptitle(f"{'workspace' if kind == 'workspace' else '1/κ'} of the best designs, {where}", fontsize=10)
+    return png(fig)
