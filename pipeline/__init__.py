@@ -19,11 +19,3 @@ def _config_dir() -> Path:
 #: the primary config directory (works from a wheel, from an editable install, from any folder)
 CONFIG_DIR = _config_dir()
 
-
-def __getattr__(name: str):
-    # lazy: ``import pipeline`` stays light (the command line imports it first)
-    if name == "read_dataset":
-        from pipeline.store.dataset import read_dataset
-
-        return read_dataset
-    raise AttributeError(f"module 'pipeline' has no attribute {name!r}")

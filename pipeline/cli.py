@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import gc
 import logging
+import os
 import sys
 from pathlib import Path
 
@@ -153,7 +154,9 @@ def run_from_hydra(cfg: DictConfig) -> dict:
         if not multirun:  # a sweep aggregates its jobs at its end (pipeline.sweeps)
             dataset = Path(cfg.paths.dataset_dir)
             aggregate(run_dir, dataset)
-            print(f"run: {run_dir}\ndataset: {dataset} (pipeline.read_dataset({str(dataset)!r}))")
+            shown = os.path.relpath(run_dir) if run_dir.is_absolute() else str(run_dir)
+            print(f"run: {shown}\ndataset: {dataset} "
+                  f"(from pipeline.store import read_dataset; read_dataset({str(dataset)!r}))")
         return {"status": "complete", "reason": ""}
     except (ConfigError, RunError) as exc:
         if isinstance(exc, ConfigError):
@@ -186,7 +189,7 @@ HELP = """usage: pm-design [+experiment=NAME] [key=value ...]       one study (p
        pm-design --hydra-help                               Hydra's own options
 
 Results: outputs/runs/<experiment>/<launch id> (one run), outputs/sweeps/... (-m);
-every complete run is added to outputs/dataset (read it with pipeline.read_dataset()).
+every complete run is added to outputs/dataset (pipeline.store.read_dataset() reads it back).
 Presets: +debug=fast (tiny sizes; kept out of the dataset's default view), +reading=NAME.
 Config groups: mechanism={mechanisms}  objective={objectives}  optimizer={optimizers}
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import re
 from pathlib import Path
 
 from pipeline.config.schema import Config
@@ -67,6 +68,6 @@ def experiment_summaries(config_dir: Path) -> dict[str, str]:
                 continue
             words.append(text)
         summary = " ".join(words)
-        first = summary.split(". ")[0].rstrip(".")
+        first = re.split(r"\.\s+(?=[A-Z(])", summary)[0].rstrip(".")  # "Fig. 8" is not a sentence end
         out[path.stem] = first if len(first) <= 110 else first[:107].rstrip() + "..."
     return out

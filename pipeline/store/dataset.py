@@ -1,4 +1,4 @@
-"""Reading the aggregated dataset back: :func:`read_dataset`.
+"""Reading the aggregated dataset back: :func:`read_dataset` (``from pipeline.store import read_dataset``).
 
 ``pd.read_parquet`` works on every table folder, but drops the Arrow field
 metadata (each column's unit and meaning). :func:`read_dataset` keeps it:

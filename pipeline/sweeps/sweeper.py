@@ -185,4 +185,5 @@ class CheckedSweeper(BasicSweeper):
             _fail(f"{summary}; failed: {'; '.join(failed)}", 1)
         log.info("%s; dataset %s", summary, self.config.paths.dataset_dir)
         print(f"sweep: {sweep_dir}\nreport: {sweep_dir / 'report.html'}\n"
-              f"dataset: {self.config.paths.dataset_dir} (pipeline.read_dataset({str(self.config.paths.dataset_dir)!r}))")
+              f"dataset: {self.config.paths.dataset_dir} "
+              f"(from pipeline.store import read_dataset; read_dataset({str(self.config.paths.dataset_dir)!r}))")

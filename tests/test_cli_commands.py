@@ -1,0 +1,94 @@
+"""The command line's subcommands (evaluate, aggregate, report), ``--help`` and did-you-mean."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from kinematics import get_mechanism
+from kinematics.workspace import evaluate
+from pipeline.cli import evaluate_command, precheck_overrides, print_help
+from pipeline.config import CONFIG_DIR, register_configs
+from pipeline.store.dataset import read_dataset
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_evaluate_one_design_prints_a_table_and_writes_parquet(tmp_path, capsys):
+    out = tmp_path / "design.parquet"
+    code = evaluate_command(["mechanism=tricept", "a=250", "b=400", "d=100", "evaluate.resolution=16",
+                             "evaluate.allow_coarse=true", "objective.w_d=0.3", "--parquet", str(out)])
+    printed = capsys.readouterr().out
+    assert code == 0, printed
+    row = pd.read_parquet(out).iloc[0]
+    # the same numbers as the evaluator called directly on that design and grid
+    ev = evaluate(get_mechanism("tricept", a=250.0, b=400.0, d=100.0), resolution=16, error_estimate=False)
+    assert row["volume"] == pytest.approx(ev.volume, rel=1e-12)
+    assert row["gdi"] == pytest.approx(ev.gdi, rel=1e-12)
+    assert row["eta"] == pytest.approx(0.3 * row["gdi"] + 0.7 * row["suri"])
+    assert row["volume_unit"] == "mm·rad²" and "param_a" not in row.index and "param_q_min_mm" in row.index
+    assert "volume" in printed and "mm·rad²" in printed and "eta" in printed
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["mechanism=tricpt", "a=250", "b=400", "d=100"], "did you mean tricept?"),
+    (["mechanism=tricept", "a=250", "b=400"], "d is missing"),
+    (["mechanism=tricept", "a=900", "b=400", "d=100"], "a=900.0 is invalid"),
+    (["mechanism=rpr2", "design=[1,2,3]"], "design="),
+])
+def test_evaluate_refuses_bad_input_in_one_line(argv, message, capsys):
+    assert evaluate_command(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and err.startswith("error:") and "\n" not in err
+
+
+@pytest.mark.parametrize("override, hint", [
+    ("objective.wd=0.5", "did you mean objective.w_d?"),     # Hydra alone advises "+objective.wd"
+    ("+objective.wd=0.5", "did you mean objective.w_d?"),
+    ("mechanism=tricpt", "did you mean tricept?"),
+    ("+experiment=h4_mxed", "did you mean h4_mixed?"),
+])
+def test_unknown_keys_and_names_get_a_did_you_mean(override, hint, capsys):
+    register_configs()
+    with pytest.raises(SystemExit) as exit_info:
+        precheck_overrides([override])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert hint in err and "\n" not in err, err
+
+
+def test_help_names_every_experiment_with_one_line(capsys):
+    print_help()
+    text = capsys.readouterr().out
+    for path in sorted((CONFIG_DIR / "experiment").glob("*.yaml")):
+        line = next(ln for ln in text.splitlines() if ln.strip().startswith(path.stem + " "))
+        assert len(line.split(None, 1)[1]) > 15, line   # says what it is
+    for command in ("evaluate", "aggregate", "report"):
+        assert f"pm-design {command}" in text
+
+
+@pytest.mark.slow
+def test_console_help_and_subcommands_run_before_hydra(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "pipeline", "--help"], capture_output=True, text=True,
+                          cwd=tmp_path, timeout=120)
+    assert proc.returncode == 0 and "h4_table3" in proc.stdout, proc.stderr
+    proc = subprocess.run([sys.executable, "-m", "pipeline", "report", "nowhere"], capture_output=True, text=True,
+                          cwd=tmp_path, timeout=120)
+    assert proc.returncode == 2 and proc.stderr.startswith("error: source='nowhere'"), proc.stderr
+
+
+def test_no_vendored_wheels():
+    assert not list(ROOT.glob("*.whl")) and not list(ROOT.glob("*/*.whl"))
+
+
+def test_read_dataset_refuses_unknown_tables(tmp_path):
+    from pipeline.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="table='bset' is invalid"):
+        read_dataset(tmp_path, "bset")
+    with pytest.raises(ConfigError, match="no best table"):
+        read_dataset(tmp_path)
