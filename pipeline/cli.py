@@ -29,8 +29,8 @@ from pipeline.config import CONFIG_DIR, register_configs, validate
 from pipeline.config.suggest import did_you_mean, key_suggestion
 from pipeline.errors import ConfigError, RunError, check_writable
 from pipeline.evaluation import workers
-from pipeline.store.runs import check_run_dir
 from pipeline.stages.aggregate import aggregate
+from pipeline.store.runs import check_run_dir
 from pipeline.study import run_study
 
 log = logging.getLogger(__name__)
@@ -201,11 +201,11 @@ Experiments (+experiment=NAME, conf/experiment/):
 def print_help() -> None:
     """``--help``: usage, subcommands, and one line per experiment."""
     from kinematics import MECHANISMS
-    from pipeline.config.suggest import experiment_summaries
     from pipeline.objectives import OBJECTIVES
     from pipeline.optimizers import OPTIMIZERS
+    from pipeline.report.reference import experiment_summaries
 
-    summaries = experiment_summaries(CONFIG_DIR)
+    summaries = experiment_summaries()
     width = max(map(len, summaries), default=0)
     print(HELP.format(mechanisms="|".join(MECHANISMS), objectives="|".join(OBJECTIVES),
                       optimizers="|".join(OPTIMIZERS),

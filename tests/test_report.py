@@ -11,7 +11,8 @@ from urllib.parse import unquote
 import pytest
 
 from pipeline.config import register_configs
-from pipeline.report.html import build_report, main as report_main
+from pipeline.report.html import build_report
+from pipeline.report.html import main as report_main
 from pipeline.stages.aggregate import aggregate
 from pipeline.store.dataset import read_dataset
 from pipeline.study import run_study

@@ -1,15 +1,13 @@
-"""Did-you-mean suggestions for unknown config keys and names, and one line per experiment.
+"""Did-you-mean suggestions for unknown config keys and names.
 
 Used by :mod:`pipeline.config.validate` (unknown keys) and by the command
-line (Hydra's "could not override" and "could not find" errors, ``--help``).
+line (Hydra's "could not override" and "could not find" errors).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import difflib
-import re
-from pathlib import Path
 
 from pipeline.config.schema import Config
 
@@ -53,21 +51,3 @@ def key_suggestion(dotted_key: str) -> str:
     suggestion = did_you_mean(leaf, section_keys(parent))
     return suggestion.replace("did you mean ", f"did you mean {parent}." if parent else "did you mean ")
 
-
-def experiment_summaries(config_dir: Path) -> dict[str, str]:
-    """Experiment name -> one line saying what it is (the first sentence of its file's header)."""
-    out = {}
-    for path in sorted(Path(config_dir, "experiment").glob("*.yaml")):
-        words = []
-        for line in path.read_text().splitlines():
-            text = line.strip()
-            if not text.startswith("#"):
-                break
-            text = text.lstrip("#").strip()
-            if text.startswith(("@package", "Study:")):
-                continue
-            words.append(text)
-        summary = " ".join(words)
-        first = re.split(r"\.\s+(?=[A-Z(])", summary)[0].rstrip(".")  # "Fig. 8" is not a sentence end
-        out[path.stem] = first if len(first) <= 110 else first[:107].rstrip() + "..."
-    return out

@@ -137,7 +137,25 @@ def reference_page() -> str:
               "`volume_unit` / `objective_unit` means the unit named in that row's column of that name.", "",
               "| column | unit | meaning |", "| --- | --- | --- |"]
     lines += [f"| `{name}` | {unit} | {meaning} |" for name, (unit, meaning) in parquet.COLUMNS.items()]
+    lines += ["", "### Units rule", "", units_rule(), "",
+              "Design variables and mechanism parameters, per mechanism (`param_*` columns as named in the "
+              "dataset):", "", "| mechanism | design variables | `param_*` columns |", "| --- | --- | --- |"]
+    for name in sorted(MECHANISMS):
+        cls = MECHANISMS[name]
+        names = {v.name for v in cls.design_variables}
+        variables = ", ".join(f"`{v.name}` [{v.unit}]" for v in cls.design_variables)
+        centre = [0.5 * (v.lower + v.upper) for v in cls.design_variables]
+        built = cls.from_design(centre, **cls.default_fixed).params()
+        params = ", ".join(f"`{parquet.param_column(k, cls.param_unit(k, v))}`" for k, v in built.items()
+                           if k not in names and isinstance(v, (int, float, str)) and not isinstance(v, bool))
+        lines.append(f"| `{name}` | {variables} | {params} |")
     return "\n".join(lines).rstrip() + "\n"
+
+
+def units_rule() -> str:
+    """The units rule of the dataset, as Markdown (from :mod:`pipeline.store.parquet`'s docstring)."""
+    text = parquet.__doc__.split("---------------------------------------------------------------------\n", 1)[1]
+    return text.strip().replace("``", "`")
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -37,8 +37,8 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from pipeline.store.cache import __version__
 from pipeline.errors import RunError
+from pipeline.store.cache import __version__
 
 META_CONFIG = b"pm_design.config"
 META_VERSION = b"pm_design.version"
