@@ -9,11 +9,22 @@ Steps (each optional part set in the optimiser's config):
 3. the result of 1-2 is the run's optimum; it is re-evaluated at
    ``refine_factor`` times the resolution, and probed for flat variables
    (:func:`pipeline.optimizers.sensitivity.flat_intervals`);
-4. ``reference``: the reference optimiser (CMA-ES + polish, same seed) is run
-   too, and its value, design and the run's relative gap to it are recorded
-   (``reference_value``, ``<name>_reference``, ``reference_gap``). The
+4. ``reference``: the problem's reference optimum, the best of several
+   independent searches (:func:`pipeline.optimizers.reference.best_known`),
+   computed once per problem by :func:`reference_stage` (a cached stage of its
+   own: every optimiser and seed of a problem shares it), and the run's gap
+   to it is recorded (``reference_value``, ``<name>_reference``,
+   ``reference_gap``, ``reference_found_by``, ``reference_evaluations``). The
    paper-faithful GA keeps its own result as the run's optimum (it is what
-   the paper did) and says how far it stops short.
+   the paper did) and says how far it stops short. ``n_evaluations`` counts
+   the run's own evaluations only, never the reference's.
+
+Error bars (issue 23): the estimated discretisation error of an optimum's
+objective is its change at ``refine_factor`` times the resolution
+(``objective_error``, ``reference_error``); the gap's error is the sum of the
+two, relative to the reference (``reference_gap_error``), and a gap below it
+is "within error" (``reference_gap_within_error``, ``reference_gap_label``),
+never a precise percentage.
 
 Designs met twice within a run are evaluated once (an in-run memo).
 """
@@ -30,8 +41,9 @@ from pipeline.config import MechanismConfig, ObjectiveConfig
 from pipeline.stages.evaluate import evaluation_frame
 from pipeline.evaluation import DesignEvaluator
 from pipeline.objectives import EVALUATION_FIELDS, OBJECTIVES, objective_values
-from pipeline.optimizers import OPTIMIZERS, REFERENCE_OPTIMIZER, OptimizerConfig, Problem, reference_optimum
+from pipeline.optimizers import OPTIMIZERS, OptimizerConfig, Problem
 from pipeline.optimizers.polish import polish
+from pipeline.optimizers.reference import best_known
 from pipeline.optimizers.sensitivity import flat_intervals
 from pipeline.store.parquet import param_column
 
@@ -56,7 +68,7 @@ class _MemoEvaluator:
 
 def optimise_design(mechanism: MechanismConfig, resolution: int | None, refine_factor: int,
                     objective: ObjectiveConfig, optimizer: OptimizerConfig,
-                    initial: np.ndarray | None = None, n_jobs: int = 1) -> dict:
+                    initial: np.ndarray | None = None, reference: dict | None = None, n_jobs: int = 1) -> dict:
     """Run the optimisation of one study.
 
     Parameters
@@ -69,6 +81,9 @@ def optimise_design(mechanism: MechanismConfig, resolution: int | None, refine_f
         The optimum is re-evaluated at this multiple of the resolution.
     initial : ndarray (k, n_design), optional
         Starting designs (the best sampled ones), used where the optimiser takes them.
+    reference : dict, optional
+        The problem's :func:`reference_stage` (computed here when
+        ``optimizer.reference`` is set and none is given).
 
     Returns
     -------
@@ -107,24 +122,87 @@ def optimise_design(mechanism: MechanismConfig, resolution: int | None, refine_f
         polish_improvement = polished.improvement
         if polished.fun > value:
             x, value, found_by = polished.x, polished.fun, "polish"
-    reference_value, reference_x = np.nan, np.full(len(names), np.nan)
-    if optimizer.reference:
-        ref = reference_optimum(scalar, optimizer.seed)
-        reference_value, reference_x = ref.fun, ref.x
-        log.info("optimise: reference %s + polish %.6g; %s %.6g (gap %.3g %%)", REFERENCE_OPTIMIZER,
-                 reference_value, optimizer.name, value, 100 * (reference_value - value) / abs(reference_value or 1))
+    if optimizer.reference and reference is None:
+        reference = reference_stage(mechanism, resolution, refine_factor, objective, n_jobs)
+    if not optimizer.reference:
+        reference = None
     history = result.history.rename(columns={f"x{j}": n for j, n in enumerate(names)})
     wall_time = history.pop("wall_time").tolist()
     # a multi-objective run evaluates outside the scalar problem: count those too
     multi_objective_evaluations = result.n_evaluations if algorithm.n_objectives > 1 else 0
     best = _best_row(mechanism, resolution, refine_factor, objective, x, value, rows)
     best.update(optimizer_value=optimizer_value, found_by=found_by, polish_improvement=polish_improvement,
-                reference_value=float(reference_value),
-                reference_gap=float((reference_value - value) / abs(reference_value)) if reference_value else np.nan,
                 n_evaluations=int(scalar.n_evaluations + multi_objective_evaluations))
-    best.update({f"{n}_reference": float(v) for n, v in zip(names, reference_x)})
+    best.update(reference_columns(best, reference, names))
+    if reference is not None:
+        log.info("optimise: reference %.6g (%s); %s %.6g, %s", reference["value"], reference["found_by"],
+                 optimizer.name, value, best["reference_gap_label"])
     best.update(flat_intervals(scalar, x, value, names))
     return {"history": history, "best": best, "front": front, "wall_time": wall_time}
+
+
+def reference_stage(mechanism: MechanismConfig, resolution: int | None, refine_factor: int,
+                    objective: ObjectiveConfig, n_jobs: int = 1) -> dict:
+    """The reference optimum of one problem (mechanism, resolution, objective), once.
+
+    :func:`~pipeline.optimizers.reference.best_known` (several CMA-ES seeds, DE,
+    a dense grid where the dimension allows, each polished) on the run's
+    objective at the run's resolution; its optimum is re-evaluated at
+    ``refine_factor`` times the resolution for the error estimate.
+
+    Returns
+    -------
+    dict
+        ``value`` (objective unit), ``x`` (list, design units), ``found_by``
+        (the best search and how many searches agree), ``n_evaluations``,
+        ``value_refined`` (objective at the refined resolution), ``error``
+        (``|value_refined - value|``, objective unit).
+    """
+    rows = _MemoEvaluator(DesignEvaluator(mechanism, resolution, n_jobs))
+    problem = Problem(lambda x: objective_values(objective.name, rows(x), objective.w_d),
+                      np.asarray(mechanism.design.lower), np.asarray(mechanism.design.upper))
+    found = best_known(problem)
+    refined = _refined_value(mechanism, resolution, refine_factor, objective, found.x)
+    log.info("reference: %.6g by %s, %d evaluations", found.fun, found.summary(), found.n_evaluations)
+    return {"value": float(found.fun), "x": [float(v) for v in found.x], "found_by": found.summary(),
+            "n_evaluations": int(found.n_evaluations), "value_refined": refined,
+            "error": abs(refined - float(found.fun))}
+
+
+def reference_columns(best: dict, reference: dict | None, names: list[str]) -> dict:
+    """The best row's reference columns (NaN/"" without a reference); see :data:`pipeline.store.parquet.COLUMNS`.
+
+    The gap is relative, ``(reference - value) / |reference|``, at the run's
+    resolution; its error is ``(objective_error + reference_error) / |reference|``
+    (the error of a difference of two estimates); a gap within it is labelled
+    "within error" and its percentage is not quoted.
+    """
+    if reference is None:
+        out = {"reference_value": np.nan, "reference_gap": np.nan, "reference_error": np.nan,
+               "reference_gap_error": np.nan, "reference_gap_within_error": False, "reference_gap_label": "",
+               "reference_found_by": "", "reference_evaluations": 0}
+        out.update({f"{n}_reference": np.nan for n in names})
+        return out
+    scale = abs(reference["value"]) or 1.0
+    gap = (reference["value"] - best["objective_value"]) / scale
+    gap_error = (best["objective_error"] + reference["error"]) / scale
+    within = bool(gap <= gap_error)
+    label = f"within error (< {100 * gap_error:.2g} %)" if within else \
+        f"{100 * gap:.3g} % ± {100 * gap_error:.2g} %"
+    out = {"reference_value": float(reference["value"]), "reference_gap": float(gap),
+           "reference_error": float(reference["error"]), "reference_gap_error": float(gap_error),
+           "reference_gap_within_error": within, "reference_gap_label": label,
+           "reference_found_by": reference["found_by"], "reference_evaluations": int(reference["n_evaluations"])}
+    out.update({f"{n}_reference": float(v) for n, v in zip(names, reference["x"])})
+    return out
+
+
+def _refined_value(mechanism: MechanismConfig, resolution: int | None, refine_factor: int,
+                   objective: ObjectiveConfig, x: np.ndarray) -> float:
+    """Objective of design ``x`` at ``refine_factor`` times the resolution (one evaluation)."""
+    res = resolution or default_resolution(mechanism.build(x), mechanism.orientation_rad())
+    refined_rows = DesignEvaluator(mechanism, res * refine_factor, 1).evaluate(np.asarray(x)[None, :])
+    return float(objective_values(objective.name, refined_rows, objective.w_d)[0])
 
 
 def _best_row(mechanism: MechanismConfig, resolution: int | None, refine_factor: int,
@@ -151,6 +229,7 @@ def _best_row(mechanism: MechanismConfig, resolution: int | None, refine_factor:
     best["volume_refined"] = float(refined["volume"])
     best["gdi_refined"] = float(refined["gdi"])
     best["objective_value_refined"] = float(objective_values(objective.name, refined_rows, objective.w_d)[0])
+    best["objective_error"] = abs(best["objective_value_refined"] - best["objective_value"])
     best["resolution"] = int(res)
     best["volume_unit"] = mech.volume_unit(mechanism.orientation_rad())
     unit = OBJECTIVES[objective.name].unit

@@ -64,7 +64,7 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "mean": ("objective_unit", "mean objective value in the population"),
     "worst": ("objective_unit", "worst objective value in the population"),
     "n_evaluations": ("", "objective evaluations (history: new in that generation; best: whole run)"),
-    "restart": ("", "CMA-ES restart index"),
+    "restart": ("", "CMA-ES run index (-1: the scout batch)"),
     "front_size": ("", "non-dominated designs in the NSGA-II population"),
     "volume": ("volume_unit", "workspace volume V (seed 000 Sec. 4.3; seed 001 eq. 38-39)"),
     "volume_unit": ("", "unit of volume, e.g. cm³·rad for H4 over (x, y, z, θ)"),
@@ -79,6 +79,8 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "objective_value": ("objective_unit", "value of the run's objective (eta when objective = mixed)"),
     "objective_unit": ("", "unit of objective_value: volume_unit for volume, 1 otherwise"),
     "objective_value_refined": ("objective_unit", "objective at refine_factor x the resolution"),
+    "objective_error": ("objective_unit", "estimated discretisation error of objective_value: "
+                                          "|objective_value_refined - objective_value|"),
     "volume_refined": ("volume_unit", "V at refine_factor x the resolution"),
     "gdi_refined": ("1", "GDI at refine_factor x the resolution"),
     "resolution": ("", "grid points per sampled axis of the run's evaluations"),
@@ -86,9 +88,18 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "optimizer_value": ("objective_unit", "what the configured optimiser found, before polish"),
     "found_by": ("", "where the reported optimum comes from: the optimiser or its polish step"),
     "polish_improvement": ("objective_unit", "gain of the polish step over the optimiser's result"),
-    "reference_value": ("objective_unit", "reference optimum (CMA-ES + polish); null if not run"),
+    "reference_value": ("objective_unit", "reference optimum of the problem: the best of several independent "
+                                          "searches (CMA-ES seeds, DE, dense grid; each polished); null if not run"),
     "reference_gap": ("1", "(reference_value - objective_value) / reference_value: how far the run stops "
                            "short of the reference optimum; null if no reference was run"),
+    "reference_error": ("objective_unit", "estimated discretisation error of reference_value (its change at "
+                                          "refine_factor x the resolution)"),
+    "reference_gap_error": ("1", "(objective_error + reference_error) / reference_value: the error of reference_gap"),
+    "reference_gap_within_error": ("", "reference_gap <= reference_gap_error: the gap is not resolved by the "
+                                       "objective's accuracy; false if no reference was run"),
+    "reference_gap_label": ("", "the gap as reported: 'within error (< e %)' or 'g % ± e %'"),
+    "reference_found_by": ("", "the search that found the reference optimum and how many searches agree"),
+    "reference_evaluations": ("", "objective evaluations of the reference searches (not in n_evaluations)"),
     "flat_variables": ("", "design variables along which the objective is flat at the optimum (the optimum is a set)"),
     "eta": ("1", "mixed index eta = w_d GDI + (1 - w_d) SURI at the row's w_d (seed 000 eq. 36)"),
     "status": ("", "run status from its manifest: complete"),
