@@ -9,8 +9,9 @@ Why a multi-start (issue 23): one CMA-ES run from the box centre settles in
 whichever basin its first steps see. On the 3-RPR mixed index 4 of 10 seeds
 stopped in a second basin 0.12 % below the best known. The run is therefore:
 
-1. scout: ``scout`` scrambled-Sobol designs (seeded) plus any ``initial``
-   designs, evaluated as one batch, show the basins of the box;
+1. scout: ``scout`` scrambled-Sobol designs (seeded; at most a quarter of the
+   budget) plus any ``initial`` designs, evaluated as one batch, show the
+   basins of the box;
 2. local runs: CMA-ES from the heads of up to ``starts`` distinct basins among
    the scouts (:func:`distinct_basins`: the best scout, then the scouts with no
    better scout within ``basin_radius`` in the unit box), with
@@ -63,7 +64,8 @@ class CMAESConfig(OptimizerConfig):
     popsize: Optional[int] = None
     #: IPOP restarts (population doubled at each)
     restarts: int = 4
-    #: scrambled-Sobol designs evaluated first to find the basins (0: start from the centre)
+    #: scrambled-Sobol designs evaluated first to find the basins (rounded down to a power of two;
+    #: 0: start from the centre)
     scout: int = 32
     #: local CMA-ES runs from the best scouts in distinct basins
     starts: int = 3
@@ -146,8 +148,12 @@ class CMAES(Optimizer):
         starts = []
         given = (np.clip(np.atleast_2d(initial), problem.lower, problem.upper) - lower) / span \
             if initial is not None and len(initial) else np.empty((0, problem.n_var))
-        if c.scout and left() >= c.scout + len(given):
-            sobol = qmc.Sobol(d=problem.n_var, scramble=True, seed=rng).random(c.scout)
+        # the scout takes at most a quarter of the budget (a tiny budget still leaves local steps)
+        # (a power of two: the Sobol sequence's balance holds for those)
+        n_scout = min(c.scout, c.max_evaluations // 4 - len(given))
+        n_scout = 2 ** int(np.log2(n_scout)) if n_scout >= 2 else 0
+        if n_scout:
+            sobol = qmc.Sobol(d=problem.n_var, scramble=True, seed=rng).random(n_scout)
             scouts = np.vstack([given, sobol])
             values = evaluate(scouts, restart=-1)
             starts = [(scouts[k], c.local_sigma, popsize) for k in
