@@ -133,7 +133,10 @@ def optima_table(best: pd.DataFrame, dirs: dict[str, Path], base: Path) -> str:
         cells += [_cell(row.get("gdi")), _cell(row.get("suri"))]
         gap = row.get("reference_gap")
         gap = None if gap is None or pd.isna(gap) else 100 * float(gap)
-        cells.append(_cell(None if gap is None else f"{gap:.3g}", gap))
+        # "within error" or "g % ± e %" (issue 23: a gap below its error is never quoted as a percentage)
+        label = row.get("reference_gap_label")
+        label = label if isinstance(label, str) and label else (None if gap is None else f"{gap:.3g} %")
+        cells.append(_cell(label, gap))
         cells += [_cell(row.get("flat_variables", "")), _cell(row.get("at_bounds", ""))]
         run_dir = dirs.get(row["run_id"])
         links = " ".join(f'<a href="{_link(run_dir / f"{t}.parquet", base)}">{t}</a>'
