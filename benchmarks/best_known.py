@@ -104,6 +104,10 @@ def load(check: bool = True) -> dict:
     return records
 
 
+def save(records: dict) -> None:
+    GOLDEN.write_text(json.dumps(records, indent=1) + "\n")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--problem", choices=sorted(PROBLEMS), action="append",
@@ -116,7 +120,7 @@ def main() -> None:
         print(f"{name}: {r['value']:.8g} at {r['design']} by {r['found_by']} ({r['agreeing']} of "
               f"{len(r['searches'])} searches agree within 0.1 %), error {100 * r['relative_error']:.3g} %, "
               f"{r['n_evaluations']} evaluations, {r['wall_time_s']} s", flush=True)
-        GOLDEN.write_text(json.dumps(records, indent=1) + "\n")
+        save(records)
 
 
 if __name__ == "__main__":

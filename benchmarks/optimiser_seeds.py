@@ -15,8 +15,9 @@ builds it: default resolution and readings):
   to the best known, "within error" when the gap is below the error of the difference
   (``pipeline.stages.optimise.reference_columns``).
 
-Target (issue 23): 10 of 10 seeds per problem, each within 1,000 evaluations. A run better
-than the best known is reported: then regenerate the golden file.
+Target (issue 23): 10 of 10 seeds per problem, each within 1,000 evaluations. A seed that
+beats the golden value becomes the best known (written back to ``best_known.json``, its
+``found_by`` naming the seed) before the gaps are measured.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ import time
 
 import numpy as np
 
-from benchmarks.best_known import PROBLEMS, REFINE_FACTOR, default_resolution_of, load, make_problem
+from benchmarks.best_known import PROBLEMS, REFINE_FACTOR, default_resolution_of, load, make_problem, save
 from pipeline.optimizers.cmaes import CMAES, CMAESConfig
 from pipeline.optimizers.ga import GA, GAConfig
 from pipeline.optimizers.polish import polish
@@ -60,6 +61,17 @@ def main() -> None:
             polished = polish(problem, found.x, found.fun, max_evaluations=config.polish_evaluations)
             gap = (best - polished.fun) / scale
             runs.append((seed, polished.fun, gap, problem.n_evaluations, polished.x))
+        top = max(runs, key=lambda r: r[1])
+        if top[1] > best:  # a seed beat the golden value: it becomes the best known (and is written back)
+            refined = refined_value(name, top[4])
+            ref = golden[name] = {**ref, "value": top[1], "design": dict(zip(ref["design"], map(float, top[4]))),
+                                  "found_by": f"cmaes seed {top[0]} + polish (benchmarks.optimiser_seeds)",
+                                  "value_refined": refined, "error": abs(refined - top[1]),
+                                  "relative_error": abs(refined - top[1]) / abs(top[1])}
+            save(golden)
+            best, scale = ref["value"], abs(ref["value"])
+            tolerance = max(TOLERANCE, ref["relative_error"])
+            runs = [(seed, value, (best - value) / scale, n_eval, x) for seed, value, _, n_eval, x in runs]
         gaps = np.array([r[2] for r in runs])
         evaluations = np.array([r[3] for r in runs])
         ok = (gaps <= tolerance) & (evaluations <= MAX_EVALUATIONS)
@@ -81,8 +93,7 @@ def main() -> None:
         details.append("| seed | value | gap to best known | evaluations | success | design |")
         details.append("| --- | --- | --- | --- | --- | --- |")
         for (seed, value, gap, n_eval, x), success in zip(runs, ok):
-            note = " (better than the best known: regenerate best_known.json)" if gap < 0 else ""
-            details.append(f"| {seed} | {value:.8g} | {100 * gap:.4f} %{note} | {n_eval} | "
+            details.append(f"| {seed} | {value:.8g} | {100 * gap:.4f} % | {n_eval} | "
                            f"{'yes' if success else 'NO'} | {', '.join(f'{v:.6g}' for v in x)} |")
         print(f"{name}: {ok.sum()}/{len(runs)}", flush=True)
     print("\n## Recommended optimiser (cmaes + polish) on seeds 0-%d against the best known\n" % (args.seeds - 1))

@@ -339,10 +339,10 @@ def test_a_job_failing_at_run_time_does_not_lose_the_sweep(monkeypatch, tmp_path
 
     real = run_module.optimise_design
 
-    def flaky(mechanism, resolution, refine_factor, objective, optimizer, initial=None, n_jobs=1):
+    def flaky(mechanism, resolution, refine_factor, objective, optimizer, initial=None, reference=None, n_jobs=1):
         if objective.w_d == 0.5:
             raise MemoryError("simulated out of memory")
-        return real(mechanism, resolution, refine_factor, objective, optimizer, initial, n_jobs)
+        return real(mechanism, resolution, refine_factor, objective, optimizer, initial, reference, n_jobs)
 
     monkeypatch.setattr(run_module, "optimise_design", flaky)
     out = tmp_path / "out"
