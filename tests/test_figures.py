@@ -113,14 +113,6 @@ def test_importing_the_package_keeps_the_matplotlib_backend():
     assert out.stdout.strip().lower() == "svg"
 
 
-def test_example_notebook_runs(tmp_path):
-    proc = subprocess.run([sys.executable, str(ROOT / "examples" / "sweep_and_read.py"), str(tmp_path)],
-                          capture_output=True, text=True, cwd=ROOT, timeout=300)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    assert_not_blank(tmp_path / "tradeoff_example.png")
-    assert (next((tmp_path / "sweeps").rglob("report.html"))).stat().st_size > 10_000
-
-
 def _chromium() -> str | None:
     return shutil.which("chromium") or shutil.which("chromium-browser") or shutil.which("google-chrome")
 
