@@ -173,12 +173,14 @@ does not depend on the scale of the platform.
     return frames, best_runs
 
 
-def workspace_pngs(d: float, h: float, Qz: float) -> dict[str, bytes]:
-    """Fig. 5-6 of the H4 design (d, h, Qz in cm): its workspace slice at θ = 0 and 1/κ on it, as PNG
-    bytes (:func:`pipeline.stages.plot.plot_workspace`, 1/κ > 0.01)."""
+def workspace_pngs(d: float, h: float, Qz: float, volume: float) -> dict[str, bytes]:
+    """Fig. 5-6 of the H4 design (d, h, Qz in cm; ``volume``: its V in cm³·rad, as in Table 1): its
+    workspace slice at θ = 0 and 1/κ on it, as PNG bytes (:func:`pipeline.stages.plot.plot_workspace`,
+    1/κ > 0.01)."""
     mech = get_mechanism("h4", d=d, h=h, Qz=Qz)
     with tempfile.TemporaryDirectory() as tmp:
-        plot_workspace(mech, mech.default_orientation, 0.01, None, Path(tmp), "H4 max V")
+        plot_workspace(mech, mech.default_orientation, 0.01, None, Path(tmp), "H4, max V (Table 1 optimum)",
+                       design_volume=f"design's V = {volume:.6g} {mech.volume_unit()}")
         return {"h4_fig5_workspace.png": (Path(tmp) / "workspace.png").read_bytes(),
                 "h4_fig6_inverse_condition.png": (Path(tmp) / "inverse_condition.png").read_bytes()}
 
@@ -186,10 +188,12 @@ def workspace_pngs(d: float, h: float, Qz: float) -> dict[str, bytes]:
 def h4_figures(r: Reproduction, frames: dict[str, pd.DataFrame], best_runs: dict[str, pd.Series]) -> None:
     """Section "Fig. 5-7": Table 1's best optimum's workspace, and the GA history of its seed 0."""
     b = best_runs["Table 1 (max V)"]
-    r.cached_figures(workspace_pngs, float(b["param_d_cm"]), float(b["param_h_cm"]), float(b["param_Qz_cm"]))
+    r.cached_figures(workspace_pngs, float(b["param_d_cm"]), float(b["param_h_cm"]), float(b["param_Qz_cm"]),
+                      float(b["volume"]))
     history = r.table("history", [frames["Table 1 (max V)"]["run_id"].iloc[0]])
+    first = frames["Table 1 (max V)"].iloc[0]
     plot_convergence(history, r.figures / "h4_fig7_convergence.png", "paper GA convergence (H4, max V, seed 0)",
-                     "V [cm³·rad]")
+                     "V [cm³·rad]", reference=float(first["reference_value"]))
     r.add(f"""
 ### Fig. 5-7
 
@@ -213,12 +217,14 @@ def h4_sweep(r: Reproduction) -> pd.DataFrame:
     ax1.plot(sweep["w_d"], sweep["gdi"], "o-", label="GDI")
     ax1.plot(sweep["w_d"], sweep["suri"], "s-", label="SURI")
     ax1.plot(sweep["w_d"], sweep["objective_value"], "^-", label="η")
-    ax1.set_xlabel("w_d")
+    ax1.set_xlabel("$w_d$ [1]")
+    ax1.set_ylabel("GDI, SURI, η [1]")
+    ax1.set_title("H4 (seed 000 Fig. 8): the paper GA's optima versus $w_d$")
     ax1.grid(alpha=0.3)
     ax1.legend(loc="upper left")
     ax2 = ax1.twinx()
     ax2.plot(sweep["w_d"], sweep["volume"], "k--", alpha=0.5, label="V")
-    ax2.set_ylabel("V [cm³ rad]")
+    ax2.set_ylabel("V (dashed) [cm³·rad]")
     fig.savefig(r.figures / "h4_fig8_tradeoff.png", dpi=110, bbox_inches="tight")
     plt.close(fig)
     v0 = float(sweep["volume"].iloc[0])

@@ -95,7 +95,9 @@ def rpr3(r: Reproduction) -> None:
         ax.set_xlim(-200, 350)
         ax.set_ylim(-200, 350)
         ax.set_aspect("equal")
-        ax.set_title(f"φ = {deg}°, area {exact:.0f} mm²")
+        ax.set_title(f"3-RPR workspace at φ = {deg}°, area {exact:.0f} mm²", fontsize=10)
+        ax.set_xlabel("x [mm]")
+        ax.set_ylabel("y [mm]")
     fig.savefig(r.figures / "rpr3_fig8_11_workspaces.png", dpi=90, bbox_inches="tight")
     plt.close(fig)
     r.add(f"""

@@ -41,7 +41,7 @@ def tricept(r: Reproduction) -> None:
                  "-", f"{grid.volume:.1f}", f"{polar.volume:.1f}", "-",
                  f"{grid.inverse_condition_min:.2f}-{grid.inverse_condition_max:.2f}"])
     spread = [f"{v:.1f}" for v in runs["volume"]]
-    r.cached_figures(slices_png, float(opt.a), float(opt.b), float(opt.d))
+    r.cached_figures(slices_png, float(opt.a), float(opt.b), float(opt.d), float(best["volume"]))
     r.add(f"""
 ## Tricept (seed 001)
 
@@ -65,26 +65,31 @@ Fig. 3-4: ψ-θ slices of the optimum's workspace at three elevations c (inside:
 """)
 
 
-def slices_png(a: float, b: float, d: float) -> dict[str, bytes]:
-    """Fig. 3-4 of the Tricept design (a, b, d in mm): ψ-θ slices of its workspace at three
-    elevations c (the 20/50/80 % quantiles of c inside a coarse grid), coloured by 1/κ; PNG bytes."""
+def slices_png(a: float, b: float, d: float, volume: float) -> dict[str, bytes]:
+    """Fig. 3-4 of the Tricept design (a, b, d in mm; ``volume``: its V in mm·rad², as in the
+    table): ψ-θ slices of its workspace at three elevations c (the 20/50/80 % quantiles of c inside
+    a coarse grid), coloured by 1/κ on one scale; PNG bytes."""
     mech = get_mechanism("tricept", a=a, b=b, d=d)
     coarse = evaluate(mech, resolution=16, return_samples=True, error_estimate=False)
     c_in = coarse.samples[coarse.inside, 0]
     levels = np.quantile(c_in, [0.2, 0.5, 0.8]) if c_in.size else [500.0, 600.0, 700.0]
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.5), layout="constrained")
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.8), layout="constrained")
     resolution = 90
-    for ax, c in zip(axes, levels):
-        ev = evaluate(mech, fixed={"c": float(c)}, resolution=resolution, return_samples=True,
-                      error_estimate=False)
+    slices = [evaluate(mech, fixed={"c": float(c)}, resolution=resolution, return_samples=True,
+                       error_estimate=False) for c in levels]
+    top = max((float(np.nanmax(np.where(ev.inside, ev.inverse_conditions, np.nan))) for ev in slices
+               if ev.inside.any()), default=1.0)
+    for ax, c, ev in zip(axes, levels, slices):
         ic = np.where(ev.inside, ev.inverse_conditions, np.nan).reshape(resolution, resolution)
         psi = ev.samples[::resolution, 1]  # C order over (psi, theta): psi varies slowest
         theta = ev.samples[:resolution, 2]
-        mesh = ax.pcolormesh(psi, theta, ic.T, shading="nearest", cmap="magma", vmin=0)
-        ax.set_title(f"c = {c:.0f} mm, area {ev.volume:.2f} rad²")
+        mesh = ax.pcolormesh(psi, theta, ic.T, shading="nearest", cmap="magma", vmin=0, vmax=top)
+        ax.set_title(f"slice c = {c:.0f} mm: area {ev.volume:.3g} rad² (of the slice)", fontsize=10)
         ax.set_xlabel("ψ [rad]")
         ax.set_ylabel("θ [rad]")
-        fig.colorbar(mesh, ax=ax, label="1/κ [1]")
+    fig.colorbar(mesh, ax=list(axes), label="1/κ [1] (one scale for the three slices)")
+    fig.suptitle(f"Tricept GA optimum (a, b, d) = ({a:.1f}, {b:.1f}, {d:.1f}) mm, design's V = {volume:.4g} mm·rad²:"
+                 " 1/κ on ψ-θ slices at three heights c")
     png = io.BytesIO()
     fig.savefig(png, format="png", dpi=100, bbox_inches="tight")
     plt.close(fig)
