@@ -1,0 +1,96 @@
+"""Every figure the project writes says what it shows: each axes has ink, axis labels with units
+and a title (its own or the figure's). Figures are captured as they are saved, so what is checked
+is what lands in the PNG."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from matplotlib.figure import Figure
+
+import pipeline.stages.plot as plot_module
+from kinematics import MECHANISMS
+from pipeline.config import MechanismConfig
+
+
+@pytest.fixture
+def saved(monkeypatch):
+    figures: list[Figure] = []
+    real = Figure.savefig
+
+    def savefig(self, *args, **kwargs):
+        figures.append(self)
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(Figure, "savefig", savefig)
+    return figures
+
+
+def _has_unit(label: str) -> bool:
+    return "[" in label and label.rstrip().endswith("]") or ("[" in label and "]" in label)
+
+
+def check_figure(fig: Figure) -> None:
+    suptitle = fig._suptitle.get_text() if fig._suptitle is not None else ""
+    plots = [ax for ax in fig.axes if ax.get_label() != "<colorbar>" and ax.axison]
+    assert plots, "no axes"
+    for ax in plots:
+        ink = list(ax.lines) + list(ax.collections) + list(ax.images) + list(ax.patches)
+        assert ink, f"empty axes: {ax.get_title()!r}"
+        arrays = [c.get_array() for c in ax.collections if c.get_array() is not None]
+        if arrays and not ax.lines:
+            assert any(np.isfinite(np.ma.filled(a.astype(float), np.nan)).any() for a in arrays), "blank mesh"
+        siblings = ax.get_shared_x_axes().get_siblings(ax)
+        xlabel = ax.get_xlabel() or next((s.get_xlabel() for s in siblings if s.get_xlabel()), "")
+        assert _has_unit(xlabel), f"x label without unit: {xlabel!r}"
+        assert _has_unit(ax.get_ylabel()), f"y label without unit: {ax.get_ylabel()!r}"
+        title = ax.get_title() or next((s.get_title() for s in siblings if s.get_title()), "") or suptitle
+        assert len(title) > 8, f"no title saying what is plotted: {title!r}"
+    for bar in [ax for ax in fig.axes if ax.get_label() == "<colorbar>"]:
+        assert _has_unit(bar.get_ylabel() or bar.get_xlabel()), "colour bar without a label and unit"
+
+
+@pytest.mark.slow  # 120² slices per mechanism
+@pytest.mark.parametrize("name", sorted(MECHANISMS))
+def test_run_workspace_figures_state_the_design_volume(name, tmp_path, saved):
+    config = MechanismConfig(name=name)
+    mech = config.build(config.centre)
+    plot_module.plot_workspace(mech, config.orientation_rad() or mech.default_orientation, 0.01, None, tmp_path,
+                               f"{name}, test", design_volume="design's V = 1 u")
+    assert len(saved) == 2
+    for fig in saved:
+        check_figure(fig)
+        assert "design's V = 1 u" in fig.axes[0].get_title()
+
+
+def test_run_and_sweep_figures(tmp_path, saved):
+    history = pd.DataFrame({"generation": range(20), "best": np.linspace(0.1, 0.3, 20),
+                            "mean": np.linspace(0.05, 0.25, 20)})
+    plot_module.plot_convergence(history, tmp_path / "c.png", "ga convergence (h4, mixed)", "η [1]", reference=0.31)
+    assert "gap 3.23 %" in saved[-1].axes[0].get_legend().get_texts()[-1].get_text()
+    best = pd.DataFrame({"objective": ["mixed"] * 6, "mechanism": ["h4"] * 6, "optimizer": ["ga"] * 6,
+                         "w_d": [0.0, 0.5, 1.0] * 2, "seed": [0, 0, 0, 0, 0, 0], "gdi": np.linspace(0.1, 0.4, 6),
+                         "suri": np.linspace(0.5, 0.2, 6), "objective_value": np.linspace(0.3, 0.2, 6)})
+    plot_module.plot_tradeoff(best, tmp_path / "t.png")
+    assert "one seed per point" in saved[-1].axes[0].get_title()  # repeats of seed 0 are not seeds
+    plot_module.plot_front(pd.DataFrame({"volume": [1.0, 2.0], "gdi": [0.3, 0.2]}), ["volume", "gdi"],
+                           tmp_path / "f.png", "h4", units={"volume": "cm³·rad"})
+    assert saved[-1].axes[0].get_xlabel() == "V [cm³·rad]"
+    for fig in saved:
+        check_figure(fig)
+
+
+@pytest.mark.slow  # three reproduction figures at their own resolutions
+def test_reproduction_figures_that_stand_alone(saved):
+    from pipeline.reproduction.delta import section_png
+    from pipeline.reproduction.h4 import workspace_pngs
+    from pipeline.reproduction.tricept import slices_png
+
+    workspace_pngs(6.0, 6.0, 42.0, 145723.0)
+    slices_png(250.0, 400.0, 100.0, 657.5)
+    section_png(resolution=40)
+    assert "145723 cm³·rad" in saved[0].axes[0].get_title()   # the design's V, not the slice's
+    assert "657.5 mm·rad²" in saved[2]._suptitle.get_text()
+    for fig in saved:
+        check_figure(fig)
