@@ -45,10 +45,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1 (default 10)")
     parser.add_argument("--no-ga", action="store_true", help="skip the paper GA's row")
+    parser.add_argument("--problem", choices=sorted(PROBLEMS), action="append", help="only these (default: all)")
     args = parser.parse_args()
-    golden = load()
+    names = args.problem or list(PROBLEMS)
+    golden = load(names)
     summary, details = [], []
-    for name in PROBLEMS:
+    for name in names:
         start = time.perf_counter()
         ref = golden[name]
         best, scale = ref["value"], abs(ref["value"])
