@@ -55,6 +55,12 @@ class Mechanism(ABC):
     #: unit of every length of this mechanism
     length_unit: ClassVar[str]
 
+    def __init_subclass__(cls, **kwargs: object) -> None:
+        super().__init_subclass__(**kwargs)
+        # one source: the defaults of mechanism.fixed come from the declared parameters
+        if "fixed_parameters" in cls.__dict__:
+            cls.default_fixed = {p.name: p.default for p in cls.fixed_parameters}
+
     # ------------------------------------------------------------------ checks
     def _check_poses(self, poses: np.ndarray) -> np.ndarray:
         arr = np.asarray(poses, dtype=float)
@@ -246,8 +252,11 @@ class Mechanism(ABC):
     # ------------------------------------------------ workspace description
     #: design variables (name, lower, upper, unit) for :meth:`from_design`
     design_variables: ClassVar[tuple["DesignVariable", ...]] = ()
-    #: constructor parameters that are not design variables, with their defaults
-    #: (the pipeline's ``mechanism.fixed``; readings of the paper are among them)
+    #: constructor parameters that are not design variables (the pipeline's ``mechanism.fixed``;
+    #: readings of the paper are among them): default, allowed range or choices, unit. Required for
+    #: every such parameter; the pipeline refuses a value outside it before any work
+    fixed_parameters: ClassVar[tuple["FixedParameter", ...]] = ()
+    #: ``{name: default}`` of :attr:`fixed_parameters` (derived from them when a class declares them)
     default_fixed: ClassVar[dict[str, object]] = {}
     #: constructor parameters given in degrees (all other numbers are lengths in
     #: :attr:`length_unit` unless listed in :attr:`unitless_params`)
@@ -429,6 +438,41 @@ class DesignVariable:
     lower: float
     upper: float
     unit: str = ""
+
+
+@dataclass(frozen=True)
+class FixedParameter:
+    """One fixed constructor parameter (``mechanism.fixed.<name>``): its default and allowed values.
+
+    A number lies in the closed range ``[lower, upper]`` (in ``unit``); a
+    named reading is one of ``choices``; ``optional`` also allows None (the
+    feature off). The ranges are those in which the mechanism's kinematics
+    are meaningful and numerically safe (no overflow or underflow of the
+    workspace integrals), not the constructor's looser checks.
+    """
+
+    name: str
+    default: object
+    lower: float | None = None
+    upper: float | None = None
+    unit: str = ""
+    choices: tuple = ()
+    optional: bool = False
+
+    def allowed(self) -> str:
+        """The allowed values as words, e.g. ``"a number in [1, 1000] cm"``."""
+        text = (f"one of {', '.join(map(str, self.choices))}" if self.choices
+                else f"a number in [{self.lower:g}, {self.upper:g}]{' ' + self.unit if self.unit else ''}")
+        return f"null or {text}" if self.optional else text
+
+    def accepts(self, value: object) -> bool:
+        """True if ``value`` is allowed (bools are not numbers; NaN and inf never are)."""
+        if value is None:
+            return self.optional
+        if self.choices:
+            return any(value == c and type(value) is type(c) for c in self.choices)
+        return (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+                and self.lower <= value <= self.upper)
 
 
 def cosine_range(lo: float, hi: float, phase: np.ndarray | float = 0.0) -> tuple[np.ndarray, np.ndarray]:

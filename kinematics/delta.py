@@ -44,7 +44,7 @@ import math
 import numpy as np
 
 from kinematics import kernels
-from kinematics.base import DesignVariable, Mechanism, check_positive, check_range
+from kinematics.base import DesignVariable, FixedParameter, Mechanism, check_positive, check_range
 
 _AZIMUTH = np.radians([0.0, 120.0, 240.0])
 
@@ -73,8 +73,14 @@ class Delta(Mechanism):
     angular = (False, False, False)
     length_unit = "mm"
     angle_params = ("theta_min", "theta_max", "passive_limit")
-    default_fixed = {"R": 200.0, "la": 200.0, "theta_min": -40.0, "theta_max": 80.0, "passive_limit": 45.0,
-                     "z_max": 0.0}
+    fixed_parameters = (
+        FixedParameter("R", 200.0, 10.0, 10000.0, "mm"),
+        FixedParameter("la", 200.0, 10.0, 10000.0, "mm"),
+        FixedParameter("theta_min", -40.0, -179.0, 179.0, "deg"),
+        FixedParameter("theta_max", 80.0, -179.0, 179.0, "deg"),
+        FixedParameter("passive_limit", 45.0, 1.0, 90.0, "deg"),
+        FixedParameter("z_max", 0.0, -100000.0, 0.0, "mm"),
+    )
     default_nodes = 32**3
     min_resolution = 16
 

@@ -61,6 +61,7 @@ from kinematics.algebra import real_tan_half_angles, trig_polynomial_in_tan_half
 from kinematics.rows import row_all, row_max, row_min
 from kinematics.base import (
     DesignVariable,
+    FixedParameter,
     Mechanism,
     check_positive,
     cosine_range,
@@ -113,8 +114,13 @@ class H4(Mechanism):
     length_unit = "cm"
 
     angle_params = ("ball_joint_limit",)
-    default_fixed = {"stroke": 100.0, "base": "scaled", "ball_joint_limit": None, "homogenising": "h",
-                     "v_star": "prism_theta"}
+    fixed_parameters = (
+        FixedParameter("stroke", 100.0, 1.0, 1000.0, "cm"),
+        FixedParameter("base", "scaled", choices=BASE_READINGS),
+        FixedParameter("ball_joint_limit", None, 1.0, 89.0, "deg", optional=True),
+        FixedParameter("homogenising", "h", choices=HOMOGENISING_READINGS),
+        FixedParameter("v_star", "prism_theta", choices=V_STAR_READINGS),
+    )
     default_nodes = 24**3
     min_resolution = 12
 

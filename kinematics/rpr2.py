@@ -16,7 +16,7 @@ import numpy as np
 
 from kinematics import kernels
 from kinematics.annuli import two_annuli_area
-from kinematics.base import DesignVariable, Mechanism, check_positive, check_range
+from kinematics.base import DesignVariable, FixedParameter, Mechanism, check_positive, check_range
 
 
 class RPR2(Mechanism):
@@ -44,7 +44,7 @@ class RPR2(Mechanism):
         #: base joints O_1, O_2 (mm), shape (2, 2)
         self.base = np.array([[0.0, 0.0], [self.b, 0.0]])
 
-    default_fixed = {"q_max": 9.6}
+    fixed_parameters = (FixedParameter("q_max", 9.6, 1.0, 1000.0, "mm"),)
     default_nodes = 400**2
     min_resolution = 64
 

@@ -49,6 +49,7 @@ from kinematics.algebra import (
 from kinematics.annuli import annuli_intersection_area
 from kinematics.base import (
     DesignVariable,
+    FixedParameter,
     Mechanism,
     check_range,
     cosine_range,
@@ -101,7 +102,10 @@ class RPR3(Mechanism):
         self._params = {"base": self.base.tolist(), "platform": self.platform.tolist(),
                         "rho_min": self.rho_min, "rho_max": self.rho_max}
 
-    default_fixed = {"rho_min": 80.0, "rho_max": 160.0}
+    fixed_parameters = (
+        FixedParameter("rho_min", 80.0, 1.0, 10000.0, "mm"),
+        FixedParameter("rho_max", 160.0, 1.0, 10000.0, "mm"),
+    )
     default_nodes = 32**3
     min_resolution = 24
 

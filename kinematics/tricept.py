@@ -59,6 +59,7 @@ from kinematics.algebra import (
 )
 from kinematics.base import (
     DesignVariable,
+    FixedParameter,
     Mechanism,
     check_positive,
     check_range,
@@ -139,8 +140,16 @@ class Tricept(Mechanism):
 
     angle_params = ("cone", "tilt_limit")
     unitless_params = ("offset_side",)
-    default_fixed = {"q_min": 400.0, "q_max": 750.0, "cone": 60.0, "cone_joints": "both",
-                     "cone_reference": "normal", "offset_side": 1, "tilt_limit": None, "homogenising": "arm"}
+    fixed_parameters = (
+        FixedParameter("q_min", 400.0, 10.0, 10000.0, "mm"),
+        FixedParameter("q_max", 750.0, 10.0, 10000.0, "mm"),
+        FixedParameter("cone", 60.0, 1.0, 179.0, "deg"),
+        FixedParameter("cone_joints", "both", choices=("both", "base", "platform", "none")),
+        FixedParameter("cone_reference", "normal", choices=("normal", "home")),
+        FixedParameter("offset_side", 1, choices=(1, -1)),
+        FixedParameter("tilt_limit", None, 1.0, 90.0, "deg", optional=True),
+        FixedParameter("homogenising", "arm", choices=("arm", "a", "d", "none")),
+    )
     default_nodes = 32**3
     min_resolution = 16
 

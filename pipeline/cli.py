@@ -7,7 +7,7 @@ the dataset) and ``report`` (``report.html`` of a sweep or dataset).
 The top layer: it checks a single run's overrides before Hydra creates
 anything (one ``error:`` line, exit 2), hands the run to Hydra, and turns
 the study's outcome into an exit status: 0 complete, 1 failed at run time,
-2 bad input, 130 interrupted. A sweep (``-m``) goes through Hydra's sweeper
+2 bad input, 130 interrupted, 143 terminated (SIGTERM, handled like Ctrl-C). A sweep (``-m``) goes through Hydra's sweeper
 (:mod:`pipeline.sweeps`), and each of its jobs through the same task.
 """
 
@@ -16,6 +16,7 @@ from __future__ import annotations
 import gc
 import logging
 import os
+import signal
 import sys
 from pathlib import Path
 
@@ -25,9 +26,11 @@ from hydra.types import RunMode
 from omegaconf import DictConfig
 from omegaconf.errors import OmegaConfBaseException
 
-from pipeline.config import CONFIG_DIR, register_configs, validate
+from hydra.errors import HydraException
+
+from pipeline.config import CONFIG_DIR, guard, register_configs, validate
 from pipeline.config.suggest import did_you_mean, key_suggestion
-from pipeline.errors import ConfigError, RunError, check_writable
+from pipeline.errors import ConfigError, RunError, Terminated, check_writable, describe_fault
 from pipeline.evaluation import workers
 from pipeline.stages.aggregate import aggregate
 from pipeline.store.runs import check_run_dir
@@ -54,25 +57,42 @@ def one_line(exc: BaseException) -> str:
     return text
 
 
+#: Hydra flags that print and exit without running the task (nothing to check)
+INFO_FLAGS = ("--help", "-h", "--hydra-help", "--version", "--cfg", "-c", "--resolve", "--package", "-p",
+              "--info", "-i", "--shell-completion", "-sc")
+#: Hydra flags that run the task: the overrides are checked as for a single run
+MULTIRUN_FLAGS = ("-m", "--multirun")
+
+
 def precheck_overrides(argv: list[str]) -> None:
-    """Compose and check a single run's config before Hydra creates anything (one line, exit 2).
+    """Check the overrides before Hydra creates or instantiates anything (one ``error:`` line, exit 2).
 
-    Catches composition errors (unknown group option, bad type), every
-    :func:`validate` error, an unwritable or already used ``hydra.run.dir``.
-
-    Skipped when any Hydra flag is given (``-m``, ``--help``, ...): Hydra
-    handles those, and a sweep's jobs are checked by the sweeper.
+    Single run: composes the config, :func:`validate` it, refuses an
+    unwritable or already used ``hydra.run.dir``. Sweep (``-m``): composes
+    the first job and, one at a time, every value of each swept key (each
+    job is checked again by the sweeper). Both: what the config may
+    instantiate (:mod:`pipeline.config.guard`). Flags that only print
+    (``--help``, ``--cfg``, ...) skip the check; flags that would load config
+    from elsewhere (``--config-dir``, ``--experimental-rerun``, ...) are refused.
     """
-    if any(arg.startswith("-") for arg in argv):
+    flags = [a.split("=", 1)[0] for a in argv if a.startswith("-")]
+    if any(f in INFO_FLAGS for f in flags):
         return
-    from hydra import compose, initialize_config_dir
-    from hydra.errors import HydraException
-
-
-    register_configs()
     try:
-        with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3", job_name="pm-design"):
-            cfg = compose(config_name="config", overrides=list(argv), return_hydra_config=True)
+        unknown = [f for f in flags if f not in MULTIRUN_FLAGS]
+        if unknown:
+            raise ConfigError(f"{unknown[0]} is refused: the config comes from conf/ and +experiment=NAME; "
+                              f"allowed flags: {', '.join(MULTIRUN_FLAGS + INFO_FLAGS)}")
+        overrides = [a for a in argv if not a.startswith("-")]
+        if flags:
+            for job_overrides in _probe_jobs(overrides):
+                cfg = _compose(job_overrides)
+                guard.check_hydra_node(cfg.hydra)
+                validate(cfg)
+            return
+        _probe_jobs(overrides)  # the keys' check
+        cfg = _compose(overrides)
+        guard.check_hydra_node(cfg.hydra)
         validate(cfg)
         run_dir = Path(cfg.hydra.run.dir)
         check_writable("hydra.run.dir", run_dir)
@@ -113,6 +133,38 @@ def suggestion(exc: BaseException, argv: list[str]) -> str:
     return ""
 
 
+def _compose(overrides: list[str]) -> DictConfig:
+    """The config of one job (with Hydra's node), as Hydra's compose API builds it."""
+    from hydra import compose, initialize_config_dir
+
+    register_configs()
+    with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3", job_name="pm-design"):
+        return compose(config_name="config", overrides=list(overrides), return_hydra_config=True)
+
+
+def _probe_jobs(overrides: list[str]) -> list[list[str]]:
+    """Jobs that together hold every override and every swept value: the first job (each sweep
+    at its first value), then each further value of each sweep with the others at their first.
+
+    Every override's key is checked by :func:`pipeline.config.guard.check_override_key` first.
+    A sweep that cannot be listed (an interval, a glob) leaves its key out: the sweeper checks it.
+    """
+    from hydra.core.override_parser.overrides_parser import OverridesParser
+
+    parsed = OverridesParser.create().parse_overrides(overrides)
+    fixed, swept = [], []
+    for o in parsed:
+        guard.check_override_key(o.key_or_group, "" if o.is_sweep_override() else o.get_value_element_as_str())
+        if not o.is_sweep_override():
+            fixed.append(o.input_line)
+        elif o.is_discrete_sweep() and o.value_type.name != "GLOB_CHOICE_SWEEP":
+            swept.append((o.get_key_element(), list(o.sweep_string_iterator())))
+    first = {key: values[0] for key, values in swept if values}
+    jobs = [fixed + [f"{k}={v}" for k, v in first.items()]]
+    for key, values in swept:
+        for value in values[1:]:
+            jobs.append(fixed + [f"{k}={value if k == key else v}" for k, v in first.items()])
+    return jobs
 
 
 def remove_if_empty(path: Path, levels: int = 3) -> None:
@@ -140,11 +192,13 @@ def shutdown_workers() -> None:
 def run_from_hydra(cfg: DictConfig) -> dict:
     """The task of ``python -m pipeline``: one run, its failure reported as one line.
 
-    Single run: bad input exits 2, a run-time failure 1, Ctrl-C 130, each with
-    one ``error:`` line and no traceback. In a multirun a run-time failure is
-    returned as the job's status so the other jobs go on
-    (:class:`pipeline.sweeps.sweeper.CheckedSweeper` sums them up).
+    Single run: bad input exits 2, a run-time failure 1, Ctrl-C 130, SIGTERM
+    143, each with one ``error:`` line and no traceback. In a multirun a
+    run-time failure is returned as the job's status so the other jobs go on
+    (:class:`pipeline.sweeps.sweeper.CheckedSweeper` sums them up); an
+    interrupt ends the sweep.
     """
+    guard_log_files()
     hc = HydraConfig.get()
     run_dir = Path(hc.runtime.output_dir)
     multirun = hc.mode == RunMode.MULTIRUN
@@ -166,10 +220,55 @@ def run_from_hydra(cfg: DictConfig) -> dict:
             return {"status": "failed", "reason": str(exc)}
         print(f"error: {exc}", file=sys.stderr)
         sys.exit(2 if isinstance(exc, ConfigError) else 1)
-    except KeyboardInterrupt:
-        shutdown_workers()
-        print(f"error: interrupted; {run_dir} is marked interrupted and will not be aggregated", file=sys.stderr)
-        sys.exit(130)
+    except KeyboardInterrupt as exc:
+        raise Interrupted(run_dir, exc) from None
+
+
+def guard_log_files() -> None:
+    """Make the log files Hydra set up drop a record they cannot write instead of raising.
+
+    Why: ``logging.FileHandler`` opens its file (``delay: true``) outside its
+    own error handling, so on a full disk the first log call of the run
+    raised ``OSError`` from wherever it was made, even while the failure was
+    being recorded. With ``logging.raiseExceptions = False`` the record is dropped silently.
+    """
+    for logger in (logging.getLogger(), logging.getLogger("pipeline")):
+        for handler in logger.handlers:
+            if isinstance(handler, logging.FileHandler) and not getattr(handler, "_pm_guarded", False):
+                handler.emit = _guarded_emit(handler, handler.emit)
+                handler._pm_guarded = True
+
+
+def _guarded_emit(handler: logging.Handler, emit):
+    def emit_or_drop(record: logging.LogRecord) -> None:
+        try:
+            emit(record)
+        except OSError:
+            handler.handleError(record)
+    return emit_or_drop
+
+
+class Interrupted(KeyboardInterrupt):
+    """An interrupt of the run in ``run_dir`` (its manifest says ``interrupted``)."""
+
+    def __init__(self, run_dir: Path, cause: KeyboardInterrupt) -> None:
+        super().__init__(str(run_dir))
+        self.run_dir, self.cause = run_dir, cause
+
+
+def _on_sigterm(signum: int, frame: object) -> None:
+    raise Terminated()
+
+
+def _exit_on_interrupt(exc: KeyboardInterrupt) -> None:
+    """One line and exit 130 (Ctrl-C) or 143 (SIGTERM); the workers are ended first."""
+    shutdown_workers()
+    cause = exc.cause if isinstance(exc, Interrupted) else exc
+    what, code = ("terminated (SIGTERM)", 143) if isinstance(cause, Terminated) else ("interrupted", 130)
+    where = (f"; {exc.run_dir} is marked interrupted and will not be aggregated"
+             if isinstance(exc, Interrupted) else "")
+    print(f"error: {what}{where}", file=sys.stderr)
+    sys.exit(code)
 
 
 register_configs()
@@ -311,13 +410,39 @@ SUBCOMMANDS = {"evaluate": evaluate_command, "aggregate": _aggregate_command, "r
 
 
 def entry() -> None:
-    """The console script: subcommands and ``--help``, else the one-line precheck of a run, then Hydra."""
+    """The console script: subcommands and ``--help``, else the one-line precheck of a run, then
+    Hydra; every failure one ``error:`` line.
+
+    Exit status: 0 complete, 1 a fault at run time (disk full, ...), 2 bad
+    input, 130 Ctrl-C, 143 SIGTERM (``timeout``, SLURM); an interrupted run's
+    manifest says ``interrupted``. ``HYDRA_FULL_ERROR=1`` keeps Hydra's own
+    tracebacks for debugging.
+    """
+    full_error = os.environ.get("HYDRA_FULL_ERROR") == "1"
+    # Why: Hydra prints its own multi-line report of an error (a bad override under -m, a
+    # config file it cannot save); with this, the error reaches the handlers below instead
+    os.environ["HYDRA_FULL_ERROR"] = "1"
+    # Why: a full disk must not print a traceback for every log record the log file refuses
+    logging.raiseExceptions = False
+    signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         code = subcommand(sys.argv[1:])
         if code is not None:
             sys.exit(code)
         precheck_overrides(sys.argv[1:])
         main()
+    except KeyboardInterrupt as exc:
+        _exit_on_interrupt(exc)
+    except (ConfigError, HydraException, OmegaConfBaseException) as exc:
+        if full_error:
+            raise
+        print(f"error: {one_line(exc)}", file=sys.stderr)
+        sys.exit(2)
+    except (OSError, RunError) as exc:
+        if full_error:
+            raise
+        print(f"error: {describe_fault(exc)}", file=sys.stderr)
+        sys.exit(1)
     finally:
         # Why: by now every result is written; what remains is Python's teardown, whose
         # garbage collections walk every object of ~1,000 modules (numba, pandas, matplotlib):

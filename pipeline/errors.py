@@ -57,3 +57,33 @@ def check_writable(field_name: str, path: str | os.PathLike) -> Path:
     return p
 
 
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``timeout``, SLURM, ``kill``): handled like Ctrl-C, reported with exit status 143."""
+
+
+def interrupt_in(exc: BaseException) -> KeyboardInterrupt | None:
+    """The interrupt behind ``exc``, if any: a Ctrl-C or SIGTERM that reached compiled code
+    (numba) comes back as ``SystemError ... returned a result with an exception set`` whose
+    cause or context is the interrupt."""
+    seen: set[int] = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return exc
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return None
+
+
+def describe_fault(exc: BaseException, where: str | os.PathLike | None = None) -> str:
+    """A run-time fault as one line naming its cause and file: ``OSError``\\ s name the file (or
+    ``where`` when the library raising it did not say)."""
+    if isinstance(exc, RunError):
+        return str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    if isinstance(exc, OSError):
+        cause = exc.strerror or (str(exc).splitlines()[0] if str(exc) else type(exc).__name__)
+        target = exc.filename or where
+        return f"{cause}: {target}" if target else cause
+    text = str(exc).splitlines()[0] if str(exc) else ""
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__

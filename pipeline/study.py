@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import json
 import logging
+import os
 import secrets
 import time
 from contextlib import contextmanager
@@ -36,7 +37,7 @@ from joblib import parallel_config
 from omegaconf import DictConfig
 
 from pipeline.config import Config, validate
-from pipeline.errors import RunError
+from pipeline.errors import RunError, Terminated, describe_fault, interrupt_in
 from pipeline.objectives import EVALUATION_FIELDS, objective_values
 from pipeline.stages.evaluate import evaluate_designs
 from pipeline.stages.optimise import optimise_design, reference_stage
@@ -99,27 +100,53 @@ def run_study(cfg: DictConfig | Config, run_dir: Path, job: int = 0, overrides: 
     write_text(run_dir / MANIFEST, json.dumps(manifest, indent=1))
     try:
         paths = _compute(c, run_dir, manifest["timings"])
-    except KeyboardInterrupt:
-        manifest.update(status="interrupted", reason="interrupted (Ctrl-C)")
-        _try_write_manifest(run_dir, manifest)
-        raise
-    except Exception as exc:  # any failure is recorded, then reported as one line
-        reason = exc.args[0] if isinstance(exc, RunError) else f"{type(exc).__name__}: {exc}"
-        reason = str(reason).splitlines()[0] if str(reason) else type(exc).__name__
-        manifest.update(status="failed", reason=reason)
-        _try_write_manifest(run_dir, manifest)
-        raise RunError(reason) from exc
-    manifest.update(status="complete", files=sorted(p.name for p in paths.values()),
-                    finished=time.strftime("%Y-%m-%dT%H:%M:%S"))
-    write_text(run_dir / MANIFEST, json.dumps(manifest, indent=1))
+        manifest.update(status="complete", files=sorted(p.name for p in paths.values()),
+                        finished=time.strftime("%Y-%m-%dT%H:%M:%S"))
+        write_text(run_dir / MANIFEST, json.dumps(manifest, indent=1))
+    except BaseException as exc:  # noqa: BLE001 - every way out leaves a final state, then re-raises
+        interrupt = interrupt_in(exc)
+        if interrupt is not None:
+            what = "terminated (SIGTERM)" if isinstance(interrupt, Terminated) else "interrupted (Ctrl-C)"
+            manifest.update(status="interrupted", reason=what)
+            _write_final_manifest(run_dir, manifest)
+            if interrupt is exc:
+                raise
+            raise interrupt from None
+        if not isinstance(exc, Exception):  # SystemExit, GeneratorExit: not a result either
+            manifest.update(status="failed", reason=type(exc).__name__)
+            _write_final_manifest(run_dir, manifest)
+            raise
+        manifest.update(status="failed", reason=describe_fault(exc, run_dir))
+        _write_final_manifest(run_dir, manifest)
+        raise RunError(manifest["reason"]) from exc
     return paths
 
 
-def _try_write_manifest(run_dir: Path, manifest: dict) -> None:
+def _write_final_manifest(run_dir: Path, manifest: dict) -> None:
+    """Rewrite the manifest with its final state, even on a full disk.
+
+    The usual atomic rewrite needs new blocks; when it fails, the state is
+    written over the ``running`` manifest in place (its blocks are already
+    allocated), without the config and padded with spaces (valid JSON).
+    """
     try:
         write_text(run_dir / MANIFEST, json.dumps(manifest, indent=1))
+        return
     except RunError as exc:  # the disk that failed the run may refuse this too
         log.error("%s", exc)
+    slim = {k: v for k, v in manifest.items() if k not in ("config", "overrides", "timings")}
+    data = json.dumps(slim).encode()
+    try:
+        with open(run_dir / MANIFEST, "r+b") as handle:
+            size = os.fstat(handle.fileno()).st_size
+            if len(data) > size:
+                slim["reason"] = slim["reason"][: max(0, len(slim["reason"]) - (len(data) - size))]
+                data = json.dumps(slim).encode()
+            handle.write(data + b" " * max(0, size - len(data)))
+            handle.flush()
+            os.fsync(handle.fileno())
+    except OSError as exc:
+        log.error("manifest of %s not updated to %s: %s", run_dir, manifest["status"], exc.strerror or exc)
 
 
 def _compute(c: Config, run_dir: Path, timings: dict) -> dict[str, Path]:
@@ -147,6 +174,7 @@ def _compute(c: Config, run_dir: Path, timings: dict) -> dict[str, Path]:
                          n_jobs=n_jobs)
         timings["optimise"] = time.perf_counter() - t0
 
+    _check_result(evaluated, scores, optimum["best"])
     keys = {"config_hash": c.config_hash(), "experiment": c.experiment_name, "mechanism": mech.name,
             "objective": objective.name, "w_d": float(objective.w_d), "optimizer": optimizer.name,
             "seed": int(optimizer.seed)}
@@ -172,6 +200,31 @@ def _compute(c: Config, run_dir: Path, timings: dict) -> dict[str, Path]:
              best["objective_value"], best["found_by"], gap, best["volume"], best["volume_unit"], best["gdi"],
              best["suri"])
     return paths
+
+
+def _check_result(evaluated: pd.DataFrame, scores: np.ndarray, best: dict) -> None:
+    """Refuse a non-finite or degenerate result: it is never written as ``complete``.
+
+    Non-finite: any evaluation field of a valid design, any objective value,
+    the optimum's objective, V, GDI or SURI (plain and refined). Degenerate:
+    an optimum without workspace (V <= 0).
+
+    Raises
+    ------
+    RunError
+        One line naming the first bad quantity.
+    """
+    numeric = evaluated.loc[evaluated["valid"], [f for f in EVALUATION_FIELDS if f != "valid"]]
+    bad = [name for name in numeric if not np.isfinite(numeric[name].to_numpy(float)).all()]
+    if bad or not np.isfinite(scores).all():
+        raise RunError(f"degenerate result: non-finite {', '.join(bad) or 'objective_value'} among the sampled "
+                       f"designs (check mechanism.fixed against the mechanism's ranges)")
+    for name in ("objective_value", "objective_value_refined", "volume", "volume_refined", "gdi", "suri"):
+        value = best.get(name)
+        if value is not None and not np.isfinite(float(value)):
+            raise RunError(f"degenerate result: the optimum's {name} is {value}")
+    if not float(best.get("volume", 0.0)) > 0:
+        raise RunError("degenerate result: the optimum has no workspace (volume 0)")
 
 
 def _stage(name: str, func, cache_dir: str, *args, **kwargs):

@@ -82,10 +82,7 @@ class MechanismConfig:
         for name, lo, hi in zip(expected, d.lower, d.upper):
             check(f"mechanism.design bounds of {name}", [lo, hi], finite(lo) and finite(hi) and lo < hi,
                   "finite numbers with lower < upper")
-        unknown = sorted(set(self.fixed) - set(cls.default_fixed))
-        check(f"mechanism.fixed.{unknown[0] if unknown else ''}", self.fixed.get(unknown[0]) if unknown else None,
-              not unknown, "keys " + ", ".join(cls.default_fixed) + f" for {self.name}")
-        self.fixed = {**cls.default_fixed, **dict(self.fixed)}
+        self.fixed = _checked_fixed(cls, dict(self.fixed))
         if self.orientation is not None:
             o = list(self.orientation)
             check("mechanism.orientation", o, len(o) == 2 and all(finite(v) for v in o)
@@ -137,6 +134,27 @@ class MechanismConfig:
                                       lower=[v.lower for v in mechanism.design_variables],
                                       upper=[v.upper for v in mechanism.design_variables]),
                    orientation=probe_orientation)
+
+
+def _checked_fixed(cls: type[Mechanism], given: dict[str, Any]) -> dict[str, Any]:
+    """The class's defaults updated with ``given``, each value in its declared range or choices.
+
+    The ranges come from the mechanism (``fixed_parameters``, one source);
+    every fixed parameter must be declared there.
+    """
+    declared = {p.name: p for p in cls.fixed_parameters}
+    keys = ", ".join(declared) or "none"
+    for name in given:
+        check(f"mechanism.fixed.{name}", given[name], name in declared, f"keys {keys} for {cls.name}")
+    for name in cls.default_fixed:
+        if name not in declared:
+            raise ConfigError(f"mechanism.fixed.{name} is invalid: {cls.__name__} declares no range for it "
+                              f"(kinematics.base.FixedParameter in fixed_parameters); allowed: keys {keys}")
+    fixed = {**cls.default_fixed, **given}
+    for name, value in fixed.items():
+        p = declared[name]
+        check(f"mechanism.fixed.{name}", value, p.accepts(value), f"{p.allowed()} for {cls.name}")
+    return fixed
 
 
 def _default_orientation(mechanism: type[Mechanism]) -> tuple[float, float]:

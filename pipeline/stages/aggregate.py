@@ -15,6 +15,12 @@ Guarantees (tested in ``tests/test_dataset.py``):
   runs never overwrite each other;
 * only runs whose ``manifest.json`` says ``complete`` are taken; the others
   are skipped with one line each;
+* a run whose files cannot be read is skipped with one line, the others added;
+* every dataset file's checksum is recorded (``checksums.json``) and verified
+  at each aggregation: a run counts as present only when all its files are
+  there and intact in every table; a damaged one is rebuilt from its source
+  run (or removed when that is gone), with one line; stale staging copies of
+  a killed aggregation are cleaned under the lock;
 * all-or-nothing: the new dataset is built beside the old one (a copy plus
   the new runs) and swapped in by renaming; on any error the previous
   dataset is left as it was. An exclusive lock serialises aggregations.
@@ -42,6 +48,14 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from pipeline.errors import ConfigError, RunError
+from pipeline.stages.dataset_checks import (
+    clean_stale,
+    dataset_files,
+    readable_run,
+    registry_entries,
+    verify_dataset,
+)
+from pipeline.store.checksums import read_registry, write_registry
 from pipeline.store.parquet import column_unit, to_table, write_table
 from pipeline.store.runs import MANIFEST, TABLES, read_manifest
 
@@ -57,6 +71,9 @@ class AggregateReport:
     added: list[str] = field(default_factory=list)
     present: list[str] = field(default_factory=list)
     skipped: list[str] = field(default_factory=list)
+    #: run ids whose dataset files were missing or failed their checksum: rebuilt from the source
+    #: run, or removed from the dataset when the source is gone (one line each in the log)
+    repaired: list[str] = field(default_factory=list)
     best_tables: list[pa.Table] = field(default_factory=list)
 
     @property
@@ -93,6 +110,10 @@ def _collect(sources: list[Path]) -> tuple[list[tuple[Path, dict]], list[str]]:
             missing = [f for f in manifest.get("files", []) if f.endswith(".parquet") and not (run / f).exists()]
             if missing:
                 skipped.append(f"{run}: incomplete (missing {', '.join(missing)})")
+                continue
+            problem = readable_run(run, manifest)
+            if problem:
+                skipped.append(f"{run}: {problem}")
                 continue
             complete.setdefault(manifest["run_id"], (run, manifest))
     return list(complete.values()), skipped
@@ -186,19 +207,49 @@ def aggregate(sources: Path | list[Path], dataset_dir: Path) -> AggregateReport:
     dataset_dir.parent.mkdir(parents=True, exist_ok=True)
     best_tables = {m["run_id"]: pq.read_table(run / "best.parquet") for run, m in records}  # read once
     with _locked(dataset_dir):
-        present = dataset_run_ids(dataset_dir)
-        new = [(run, m) for run, m in records if m["run_id"] not in present]
+        for line in clean_stale(dataset_dir):
+            log.warning("aggregate: %s", line)
+        present, damaged, sources = verify_dataset(dataset_dir)
+        rebuild = _sources_of_damaged(damaged, sources, records, best_tables)
+        new = [(run, m) for run, m in records + rebuild if m["run_id"] not in present]
         report.present = sorted(m["run_id"] for _, m in records if m["run_id"] in present)
-        if new:
-            _build_and_swap(dataset_dir, new, best_tables)
-        report.added = [m["run_id"] for _, m in new]
+        report.repaired = sorted(damaged)
+        sources.update({m["run_id"]: str(run) for run, m in new})
+        if new or damaged or (present and read_registry(dataset_dir) is None):
+            _build_and_swap(dataset_dir, new, best_tables, set(damaged), sources)
+        report.added = [m["run_id"] for _, m in new if m["run_id"] not in damaged]
     report.best_tables = list(best_tables.values())
     log.info("aggregate: %d runs added, %d already present, %d skipped -> %s", len(report.added),
              len(report.present), len(report.skipped), dataset_dir)
     return report
 
 
-def _build_and_swap(dataset_dir: Path, new: list[tuple[Path, dict]], best_tables: dict[str, pa.Table]) -> None:
+def _sources_of_damaged(damaged: dict[str, str], sources: dict[str, str], records: list[tuple[Path, dict]],
+                        best_tables: dict[str, pa.Table]) -> list[tuple[Path, dict]]:
+    """The source runs of damaged dataset runs that are not among ``records`` (read from the
+    recorded source directory); one line per damaged run, rebuilt or removed."""
+    given = {m["run_id"] for _, m in records}
+    out = []
+    for run_id, problem in sorted(damaged.items()):
+        source = Path(sources[run_id]) if sources.get(run_id) else None
+        manifest = read_manifest(source) if source is not None else None
+        if run_id in given:
+            log.warning("aggregate: dataset run %s: %s; rebuilt from its source run", run_id, problem)
+        elif (manifest is not None and manifest.get("run_id") == run_id and manifest.get("status") == "complete"
+              and not readable_run(source, manifest)):
+            log.warning("aggregate: dataset run %s: %s; rebuilt from %s", run_id, problem, source)
+            best_tables[run_id] = pq.read_table(source / "best.parquet")
+            out.append((source, manifest))
+        else:
+            log.warning("aggregate: dataset run %s: %s; removed from the dataset (its source run %s is gone "
+                        "or unreadable)", run_id, problem, source or "is unknown")
+    return out
+
+
+def _build_and_swap(dataset_dir: Path, new: list[tuple[Path, dict]], best_tables: dict[str, pa.Table],
+                    remove: set[str] = frozenset(), sources: dict[str, str] | None = None) -> None:
+    """Build the new dataset in a staging copy (``remove``: run ids whose files are dropped
+    first; ``new``: runs added), record every file's checksum, swap it in."""
     token = secrets.token_hex(4)
     staging = dataset_dir.parent / f".{dataset_dir.name}.staging-{token}"
     try:
@@ -206,6 +257,9 @@ def _build_and_swap(dataset_dir: Path, new: list[tuple[Path, dict]], best_tables
             shutil.copytree(dataset_dir, staging)
         else:
             staging.mkdir(parents=True)
+        for run_id in remove:
+            for path in dataset_files(staging).get(run_id, {}).values():
+                path.unlink()
         tables = [(m, _run_tables(run, m, best_tables[m["run_id"]])) for run, m in new]
         for name in DATASET_TABLES:
             fresh = [(m, t[name]) for m, t in tables if name in t]
@@ -221,6 +275,7 @@ def _build_and_swap(dataset_dir: Path, new: list[tuple[Path, dict]], best_tables
                     write_table(conform(pq.read_table(path), schema), path)
             for manifest, table in fresh:
                 write_table(conform(table, schema), folder / f"{manifest['run_id']}.parquet", manifest["config"])
+        write_registry(staging, registry_entries(staging, sources or {}))
         if dataset_dir.exists():
             old = dataset_dir.parent / f".{dataset_dir.name}.old-{token}"
             os.rename(dataset_dir, old)
@@ -264,7 +319,8 @@ def main(argv: list[str] | None = None) -> int:
         print("error: interrupted; the dataset is unchanged", file=sys.stderr)
         return 130
     print(json.dumps({"dataset": str(args.dataset), "added": len(report.added),
-                      "present": len(report.present), "skipped": len(report.skipped)}))
+                      "present": len(report.present), "skipped": len(report.skipped),
+                      "repaired": len(report.repaired)}))
     return 0
 
 

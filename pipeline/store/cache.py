@@ -6,13 +6,16 @@ one with the Memory of ``<cache_dir>/<CODE_VERSION>``. The code version
 ``pipeline`` except the document writers) is part of the location, not of the stages' signatures, so
 editing any source starts a fresh cache and the stages never see it.
 ``n_jobs`` is never part of a key: results do not depend on it. Tests check
-hits with joblib's own ``check_call_in_cache``.
+hits with joblib's own ``check_call_in_cache``. Every cached output carries a
+checksum verified when it is read (:class:`CheckedStage`).
 """
 
 from __future__ import annotations
 
 import hashlib
 import inspect
+import logging
+import os
 import re
 import shutil
 from collections.abc import Callable
@@ -20,6 +23,7 @@ from functools import lru_cache
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
+import joblib
 from joblib import Memory
 
 import kinematics
@@ -29,6 +33,8 @@ try:
     __version__ = version("pm-design")
 except PackageNotFoundError:  # a source tree that was not installed
     __version__ = "0+unknown"
+
+log = logging.getLogger(__name__)
 
 
 #: modules (and folders of modules) that write documents and pages from results, which no cached
@@ -112,7 +118,73 @@ def memory(cache_dir: str) -> Memory:
     return Memory(location=str(location), verbose=0)
 
 
-def cached(func: Callable, cache_dir: str | Path) -> Callable:
-    """``func`` memoised on disk in ``cache_dir``; an ``n_jobs`` argument is not keyed."""
-    params = inspect.signature(func).parameters
-    return memory(str(cache_dir)).cache(func, ignore=[n for n in ("n_jobs",) if n in params])
+class CheckedStage:
+    """A stage memoised by ``joblib.Memory`` whose cached outputs carry a checksum verified on read.
+
+    Why: joblib serves whatever pickle sits in an entry; one overwritten by
+    another valid pickle (a copy between machines, a bad restore, a hand
+    edit) would land in a ``complete`` run. Each output's hash
+    (``joblib.hash`` of the value) is recorded beside the cache under
+    ``checksums/<stage>/<hash of the call's arguments>``; a hit whose value
+    does not match (or has no record) is recomputed, with one warning line.
+    """
+
+    def __init__(self, func: Callable, cache_dir: str | Path) -> None:
+        params = inspect.signature(func).parameters
+        self.ignored = [n for n in ("n_jobs",) if n in params]
+        self.memorized = memory(str(cache_dir)).cache(func, ignore=self.ignored)
+        self.name = func.__name__
+        self.records = Path(cache_dir) / CODE_VERSION / "checksums" / f"{func.__module__}.{func.__qualname__}"
+
+    def check_call_in_cache(self, *args: object, **kwargs: object) -> bool:
+        """True if joblib holds an entry for these arguments (verified only when read)."""
+        return self.memorized.check_call_in_cache(*args, **kwargs)
+
+    def __call__(self, *args: object, **kwargs: object) -> object:
+        hit = self.memorized.check_call_in_cache(*args, **kwargs)
+        value = self.memorized(*args, **kwargs)
+        digest = hash_value(value)
+        record = self.records / f"{self._call_key(args, kwargs)}.sha"
+        if hit:
+            recorded = _read_record(record)
+            if recorded == digest:
+                return value
+            log.warning("%s: cached output failed its checksum (%s); recomputed", self.name,
+                        "no record" if recorded is None else f"recorded {recorded[:12]}, found {digest[:12]}")
+            value, _ = self.memorized.call(*args, **kwargs)
+            digest = hash_value(value)
+        _write_record(record, digest)
+        return value
+
+    def _call_key(self, args: tuple, kwargs: dict) -> str:
+        bound = inspect.signature(self.memorized.func).bind(*args, **kwargs)
+        bound.apply_defaults()
+        return hash_value({k: v for k, v in bound.arguments.items() if k not in self.ignored})
+
+
+def hash_value(value: object) -> str:
+    """Content hash of a stage's output or arguments (``joblib.hash``: arrays by their bytes)."""
+    return joblib.hash(value, hash_name="sha1")
+
+
+def _read_record(path: Path) -> str | None:
+    try:
+        return path.read_text().strip() or None
+    except OSError:
+        return None
+
+
+def _write_record(path: Path, digest: str) -> None:
+    """Record an output's checksum (atomically); a failure only costs a recomputation later."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        tmp.write_text(digest)
+        os.replace(tmp, path)
+    except OSError as exc:
+        log.warning("checksum of %s not recorded: %s", path.parent.name, exc.strerror or exc)
+
+
+def cached(func: Callable, cache_dir: str | Path) -> CheckedStage:
+    """``func`` memoised on disk in ``cache_dir`` (checksummed); an ``n_jobs`` argument is not keyed."""
+    return CheckedStage(func, cache_dir)
