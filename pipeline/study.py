@@ -133,7 +133,7 @@ def _write_final_manifest(run_dir: Path, manifest: dict) -> None:
         write_text(run_dir / MANIFEST, json.dumps(manifest, indent=1))
         return
     except RunError as exc:  # the disk that failed the run may refuse this too
-        log.error("%s", exc)
+        failure = exc
     slim = {k: v for k, v in manifest.items() if k not in ("config", "overrides", "timings")}
     data = json.dumps(slim).encode()
     try:
@@ -145,6 +145,7 @@ def _write_final_manifest(run_dir: Path, manifest: dict) -> None:
             handle.write(data + b" " * max(0, size - len(data)))
             handle.flush()
             os.fsync(handle.fileno())
+        log.error("%s; the manifest was updated in place", failure)
     except OSError as exc:
         log.error("manifest of %s not updated to %s: %s", run_dir, manifest["status"], exc.strerror or exc)
 
