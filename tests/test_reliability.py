@@ -86,7 +86,51 @@ def copy_run(source: Path, target: Path, suffix: str) -> Path:
     return target
 
 
+def precheck(argv: list[str], capsys) -> tuple[int, str]:
+    """The CLI's check of the overrides, in this process: (exit status, stderr)."""
+    from pipeline.cli import precheck_overrides
+
+    try:
+        precheck_overrides(argv)
+        code = 0
+    except SystemExit as exc:
+        code = int(exc.code or 0)
+    return code, capsys.readouterr().err.strip()
+
+
+@pytest.mark.parametrize("argv, fragment", [
+    (["mechanism.fixed.stroke=1e300"], "mechanism.fixed.stroke=1e+300 is invalid: allowed a number in [1, 1000] cm"),
+    (["mechanism.fixed.stroke=1e-300"], "mechanism.fixed.stroke=1e-300 is invalid: allowed a number in [1, 1000]"),
+    (["mechanism.fixed.stroke=abc"], "mechanism.fixed.stroke='abc' is invalid: allowed a number in [1, 1000]"),
+    (["mechanism.fixed.stroke=nan"], "mechanism.fixed.stroke=nan is invalid"),
+    (["mechanism.fixed.stroke=-100"], "mechanism.fixed.stroke=-100 is invalid"),
+    (["mechanism=tricept", "mechanism.fixed.tilt_limit=0"], "mechanism.fixed.tilt_limit=0 is invalid: allowed null or"),
+    (["mechanism=delta", "mechanism.fixed.z_max=1"], "mechanism.fixed.z_max=1 is invalid"),
+    (["-m", "objective.w_d=abc"], "objective.w_d"),
+    (["-m", "mechanism.fixed.stroke=1e300,10"], "mechanism.fixed.stroke=1e+300 is invalid"),
+    (["-m", "objective.w_d=0,1", "mechanism.fixed.stroke=10,1e-300"], "mechanism.fixed.stroke=1e-300 is invalid"),
+    (["+hydra.callbacks.x._target_=shutil.copyfile"], "hydra.callbacks.x._target_ is refused"),
+    (["-m", "+hydra.callbacks.x._target_=builtins.open"], "hydra.callbacks.x._target_ is refused"),
+    (["+hydra.job.env_set.PYTHONPATH=/tmp"], "hydra.job.env_set.PYTHONPATH is refused"),
+    (["-m", "+hydra.job.env_set.PYTHONPATH=/tmp"], "hydra.job.env_set.PYTHONPATH is refused"),
+    (["hydra.launcher._target_=os.system"], "is refused"),
+    (["--config-dir=/tmp"], "--config-dir is refused"),
+    (["--experimental-rerun", "x.pickle"], "--experimental-rerun is refused"),
+])
+def test_items01_02_03_16_17_precheck_in_process(argv, fragment, tmp_path, capsys):
+    code, err = precheck([*argv, f"paths.output_dir={tmp_path / 'out'}"], capsys)
+    assert code == 2 and err.startswith("error: ") and "\n" not in err and fragment in err, err
+    assert files_under(tmp_path / "out") == []
+
+
+def test_a_good_sweep_passes_the_precheck(tmp_path, capsys):
+    code, err = precheck(["-m", "+experiment=rpr2_mixed", "objective.w_d=0,0.5,1", "mechanism.fixed.q_max=9,9.6",
+                          f"paths.output_dir={tmp_path / 'out'}"], capsys)
+    assert code == 0 and err == ""
+
+
 # ------------------------------------------------------------------ 1, 2: values
+@pytest.mark.slow
 @pytest.mark.parametrize("value", ["1e300", "1e-300", "abc", "nan", "-100", "inf", "true"])
 def test_item01_02_fixed_values_are_refused_naming_key_and_range(value, tmp_path):
     out = tmp_path / "out"
@@ -140,6 +184,7 @@ def test_item01_an_optimum_without_workspace_is_never_complete(monkeypatch, tmp_
 
 
 # ------------------------------------------------------------------ 3: -m precheck
+@pytest.mark.slow
 @pytest.mark.parametrize("overrides, fragment", [
     (["objective.w_d=abc"], "objective.w_d"),
     (["objective.w_d=0,abc"], "objective.w_d"),
@@ -169,6 +214,7 @@ runpy.run_module("pipeline", run_name="__main__")
 """
 
 
+@pytest.mark.slow
 def test_item04_disk_full_while_hydra_saves_its_config_is_one_line_exit_1(tmp_path):
     out = tmp_path / "out"
     script = FULL_DISK.format(where=".hydra", extra="")
@@ -180,6 +226,7 @@ def test_item04_disk_full_while_hydra_saves_its_config_is_one_line_exit_1(tmp_pa
     assert not list(out.rglob("manifest.json")) and not list(out.rglob("*.parquet"))
 
 
+@pytest.mark.slow
 def test_item04_disk_full_during_the_run_ends_failed_with_one_line_naming_the_place(tmp_path):
     """Every write of the run fails (results, the log file, the manifest's rewrite): one line,
     exit 1, no logging tracebacks, and the manifest still ends ``failed`` (rewritten in place)."""
@@ -422,6 +469,7 @@ def test_item13_a_kill_between_the_swap_renames_is_restored(one_run, tmp_path):
 
 
 # ------------------------------------------------------------------ 16, 17: injection
+@pytest.mark.slow
 def test_item16_callbacks_from_the_command_line_run_nothing(tmp_path):
     victim = tmp_path / "victim.txt"
     victim.write_text("keep")
@@ -438,6 +486,7 @@ def test_item16_callbacks_from_the_command_line_run_nothing(tmp_path):
     assert files_under(out) == []
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("override", ["+hydra.launcher._target_=os.system",
                                       "hydra.job_logging.handlers.console.class=shutil.copyfile",
                                       "hydra.sweeper._target_=os.system"])
@@ -463,6 +512,7 @@ def test_item16_experiment_files_cannot_add_callbacks_or_environment():
     guard.check_hydra_node(with_(job={**hydra["job"], "env_set": {"OMP_NUM_THREADS": "1"}}))
 
 
+@pytest.mark.slow
 def test_item17_env_set_pythonpath_plants_nothing(tmp_path):
     planted = tmp_path / "plant"
     planted.mkdir()
