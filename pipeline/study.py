@@ -38,6 +38,7 @@ from omegaconf import DictConfig
 
 from pipeline.config import Config, validate
 from pipeline.errors import RunError, Terminated, describe_fault, interrupt_in
+from pipeline.evaluation.scale import workers_for
 from pipeline.objectives import EVALUATION_FIELDS, objective_values
 from pipeline.stages.evaluate import evaluate_designs
 from pipeline.stages.optimise import optimise_design, reference_stage
@@ -59,7 +60,7 @@ def parallel_backend(parallel):
         if parallel.scheduler_address:
             client, cluster = Client(parallel.scheduler_address, timeout=10), None
         else:
-            cluster = LocalCluster(n_workers=int(parallel.n_jobs), threads_per_worker=1,
+            cluster = LocalCluster(n_workers=workers_for(parallel.n_jobs, parallel.n_jobs), threads_per_worker=1,
                                    processes=True, host="127.0.0.1", dashboard_address=None)
             client = Client(cluster)
         try:

@@ -21,6 +21,7 @@ from joblib.parallel import get_active_backend
 from kinematics import MECHANISMS
 from kinematics.workspace import evaluate
 from pipeline.evaluation import compile_ahead, workers
+from pipeline.evaluation.scale import retry_lost_workers, workers_for
 from pipeline.objectives import EVALUATION_FIELDS
 
 
@@ -64,7 +65,9 @@ class DesignEvaluator:
         Grid points per sampled axis (None: the mechanism's default per design).
     n_jobs : int
         Parallel chunks per batch (1 = in-process; loky: this process evaluates
-        one chunk, ``n_jobs - 1`` worker processes the others).
+        one chunk, ``n_jobs - 1`` worker processes the others), capped by the
+        usable cores and the batch size (:func:`pipeline.evaluation.scale.workers_for`);
+        on dask a batch is sent again after a lost worker while workers remain.
     """
 
     mechanism: object
@@ -77,13 +80,13 @@ class DesignEvaluator:
         if designs.shape[0] == 0:
             return np.empty((0, len(EVALUATION_FIELDS)))
         spec = MechanismSpec.of(self.mechanism)
-        n_chunks = min(self.n_jobs, designs.shape[0])
+        n_chunks = workers_for(self.n_jobs, designs.shape[0])
         backend, _ = get_active_backend()
         # loky (the default): this process evaluates the first chunk, a worker group
         # (pipeline.evaluation.workers) the others; joblib's Parallel polls for results every
         # 10 ms, which cost 5-10 ms of every GA generation. Made before the
         # compilation below, so that the workers' start-up (~1.5 s) overlaps it.
-        group = (workers.worker_group(self.n_jobs - 1, preload=(__name__,))
+        group = (workers.worker_group(n_chunks - 1, preload=(__name__,))
                  if n_chunks > 1 and isinstance(backend, LokyBackend) and workers.AVAILABLE else None)
         _compile_kernels(spec, designs)
         if n_chunks == 1:
@@ -94,7 +97,8 @@ class DesignEvaluator:
             parts = group.map(_evaluate_chunk, [(spec, self.resolution, c) for c in chunks[1:]],
                               local=lambda: _evaluate_chunk(spec, self.resolution, chunks[0]))
         else:  # dask, threading, multiprocessing: joblib's dispatch
-            parts = Parallel(n_jobs=n_chunks)(delayed(_evaluate_chunk)(spec, self.resolution, c) for c in chunks)
+            parts = retry_lost_workers(lambda: Parallel(n_jobs=n_chunks)(
+                delayed(_evaluate_chunk)(spec, self.resolution, c) for c in chunks))
         return np.vstack(parts)
 
 
