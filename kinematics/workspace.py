@@ -320,89 +320,138 @@ class _PointValues:
 
 #: bisection steps per boundary crossing of a grid edge (``method="grid"``): the crossing is
 #: located to ``h / 2**(BISECTIONS + 1)`` (h the grid step), well below the discretisation error
-BISECTIONS = 6
+BISECTIONS = 4
 #: largest ``h / distance`` of a crossing (a crossing on a node: the plane through the node)
 _MAX_SLOPE = 1e4
 
 
-def _edge_crossings(values: _PointValues, axes: list[np.ndarray], inside: np.ndarray,
-                    f: tuple[np.ndarray, ...], axis: int, ends: tuple[float, float],
-                    steps: int = BISECTIONS) -> tuple[np.ndarray, ...]:
-    """Where the workspace boundary crosses the grid edges along one axis.
+def _bisect(values: _PointValues, probe: np.ndarray, column: np.ndarray, p_in: np.ndarray,
+            p_out: np.ndarray, start: np.ndarray, steps: int) -> tuple[np.ndarray, np.ndarray]:
+    """Bisect ``steps`` times between an inside (``p_in``) and an outside (``p_out``) value of
+    column ``column`` (per row) of the poses ``probe`` (N, dof), all rows in one call per step.
 
-    ``inside`` is the node membership in the grid's shape. The edges are those
-    between neighbouring nodes along ``axis`` and the half edges from an end
-    node to the box face ``ends`` (the face is evaluated where the end node is
-    inside: a workspace that fills the box up to the face has no crossing
-    there). Each edge whose ends differ in membership is bisected ``steps``
-    times; the crossing is the middle of the last bracket. ``f`` are integrands
-    (node arrays, 0 outside) whose values at the crossings are reported: those at
-    the last inside bisection point.
+    The crossing is then placed inside the last bracket: where ``1/kappa``
+    interpolated linearly between the bracket's ends meets the dexterity limit
+    when both ends are reachable (a dexterity boundary: ``1/kappa`` is
+    continuous there, so the crossing moves continuously with the design), else
+    at the bracket's middle (a reachability boundary: to ``h / 2**(steps+1)``).
 
     Returns
     -------
-    minus, plus : ndarray, grid shape
-        Distance (unit of the axis) from each node to a crossing on its edge
-        towards lower / higher values of the axis; inf where there is none.
-    at_minus, at_plus : ndarray, shape (len(f),) + grid shape
-        The integrands at those crossings (0 where there is none).
+    crossing : ndarray (N,)
+    value : ndarray (k, N)
+        The integrands (:func:`_integrands`) at the last inside point, ``start`` if none.
     """
-    n = inside.shape[axis]
-    pos = np.concatenate([[ends[0]], axes[axis], [ends[1]]])
-    ext_shape = list(inside.shape)
-    ext_shape[axis] = n + 2
-    ins = np.zeros(ext_shape, dtype=bool)
-    inner = [slice(None)] * inside.ndim
-    inner[axis] = slice(1, n + 1)
-    ins[tuple(inner)] = inside
-    g = np.zeros((len(f),) + tuple(ext_shape))
-    for k, fk in enumerate(f):
-        g[k][tuple(inner)] = fk
-    for face, node in ((0, 0), (n + 1, n - 1)):
-        idx = list(np.nonzero(np.take(inside, [node], axis=axis)))
-        if idx[0].size:
-            idx[axis] = np.full(idx[0].size, node)
-            poses = _node_poses(axes, idx)
-            poses[:, axis] = pos[face]
-            idx[axis] = np.full(idx[0].size, face)
-            i_, w_, c_, _ = values(poses)
-            ins[tuple(idx)] = i_
-            for k, fk in enumerate(_integrands(i_, w_, c_, len(f))):
-                g[k][tuple(idx)] = fk
-    lower = [slice(None)] * inside.ndim
-    upper = [slice(None)] * inside.ndim
-    lower[axis], upper[axis] = slice(0, n + 1), slice(1, n + 2)
-    left, right = ins[tuple(lower)], ins[tuple(upper)]
-    minus, plus = np.full(inside.shape, np.inf), np.full(inside.shape, np.inf)
-    at_minus, at_plus = np.zeros((len(f),) + inside.shape), np.zeros((len(f),) + inside.shape)
-    idx = list(np.nonzero(left ^ right))  # edge e joins extended points e and e + 1
-    if not idx[0].size:
-        return minus, plus, at_minus, at_plus
-    edge = idx[axis]
-    in_left = left[tuple(idx)]
-    p_in = np.where(in_left, pos[edge], pos[edge + 1])
-    p_out = np.where(in_left, pos[edge + 1], pos[edge])
-    idx_node = list(idx)
-    idx_node[axis] = np.clip(edge - 1, 0, n - 1)
-    probe = _node_poses(axes, idx_node)
-    idx_in = list(idx)
-    idx_in[axis] = np.where(in_left, edge, edge + 1)
-    value = g[(slice(None),) + tuple(idx_in)]
+    rows = np.arange(probe.shape[0])
+    value = start
+    ic_in = np.full(rows.size, np.nan)
+    ic_out = np.full(rows.size, np.nan)
     for _ in range(steps):
         mid = 0.5 * (p_in + p_out)
-        probe[:, axis] = mid
-        inside_mid, w_, c_, _ = values(probe)
+        probe[rows, column] = mid
+        inside_mid, weight, ic, _ = values(probe)
         p_in, p_out = np.where(inside_mid, mid, p_in), np.where(inside_mid, p_out, mid)
-        value = np.where(inside_mid, np.array(_integrands(inside_mid, w_, c_, len(f))), value)
-    crossing = 0.5 * (p_in + p_out)
-    for node, side, at_side, sign in ((edge - 1, plus, at_plus, 1.0), (edge, minus, at_minus, -1.0)):
-        # the node left of the crossing sees it on its plus side, the one right of it on its minus side
-        keep = (node >= 0) & (node < n)
-        at = [i[keep] for i in idx]
-        at[axis] = node[keep]
-        side[tuple(at)] = sign * (crossing[keep] - axes[axis][node[keep]])
-        at_side[(slice(None),) + tuple(at)] = value[:, keep]
-    return minus, plus, at_minus, at_plus
+        ic_in, ic_out = np.where(inside_mid, ic, ic_in), np.where(inside_mid, ic_out, ic)
+        if value.shape[0]:
+            value = np.where(inside_mid, np.array(_integrands(inside_mid, weight, ic, value.shape[0])), value)
+    limit = values.min_ic
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = (ic_in - limit) / (ic_in - ic_out)
+    dexterity = (limit > 0) & np.isfinite(t) & (ic_out <= limit) & (ic_in > limit)
+    t = np.where(dexterity, np.clip(t, 0.0, 1.0), 0.5)
+    return p_in + t * (p_out - p_in), value
+
+
+def _edge_crossings(values: _PointValues, axes: list[np.ndarray], inside: np.ndarray,
+                    f: tuple[np.ndarray, ...], sampled: list[int], box: tuple[np.ndarray, np.ndarray],
+                    steps: int = BISECTIONS) -> list[tuple[np.ndarray, ...]]:
+    """Where the workspace boundary crosses the grid edges, along each sampled axis.
+
+    ``inside`` is the node membership in the grid's shape. The edges along
+    axis j are those between neighbouring nodes and the half edges from an
+    end node to the box face (the face is evaluated where the end node is
+    inside: a workspace that fills the box up to the face has no crossing
+    there). Each edge whose ends differ in membership is bisected ``steps``
+    times (every axis in the same calls); the crossing is the middle of the
+    last bracket. ``f`` are integrands (node arrays, 0 outside) whose values
+    at the crossings are reported: those at the last inside bisection point.
+
+    Returns
+    -------
+    list of (minus, plus, at_minus, at_plus), one per sampled axis
+        ``minus``, ``plus`` (grid shape): distance (unit of the axis) from each
+        node to a crossing on its edge towards lower / higher values of the
+        axis, inf where there is none; ``at_minus``, ``at_plus`` ((len(f),) +
+        grid shape): the integrands at those crossings (0 where there is none).
+    """
+    ndim, k = inside.ndim, len(f)
+    ext, faces = [], []
+    for j in sampled:
+        n = inside.shape[j]
+        pos = np.concatenate([[float(box[0][j])], axes[j], [float(box[1][j])]])
+        shape = list(inside.shape)
+        shape[j] = n + 2
+        ins, g = np.zeros(shape, dtype=bool), np.zeros((k,) + tuple(shape))
+        inner = [slice(None)] * ndim
+        inner[j] = slice(1, n + 1)
+        ins[tuple(inner)] = inside
+        for m in range(k):
+            g[m][tuple(inner)] = f[m]
+        ext.append((j, n, pos, ins, g))
+        for face, node in ((0, 0), (n + 1, n - 1)):
+            idx = list(np.nonzero(np.take(inside, [node], axis=j)))
+            if idx[0].size:
+                idx[j] = np.full(idx[0].size, node)
+                poses = _node_poses(axes, idx)
+                poses[:, j] = pos[face]
+                idx[j] = np.full(idx[0].size, face)
+                faces.append((len(ext) - 1, tuple(idx), poses))
+    if faces:
+        inside_f, weight_f, ic_f, _ = values(np.vstack([p for *_, p in faces]))
+        start = 0
+        for e, idx, poses in faces:
+            stop = start + poses.shape[0]
+            ext[e][3][idx] = inside_f[start:stop]
+            for m, fm in enumerate(_integrands(inside_f[start:stop], weight_f[start:stop], ic_f[start:stop], k)):
+                ext[e][4][m][idx] = fm
+            start = stop
+    brackets = []
+    for j, n, pos, ins, g in ext:
+        lower = [slice(None)] * ndim
+        upper = [slice(None)] * ndim
+        lower[j], upper[j] = slice(0, n + 1), slice(1, n + 2)
+        left, right = ins[tuple(lower)], ins[tuple(upper)]
+        idx = list(np.nonzero(left ^ right))  # edge e joins extended points e and e + 1
+        edge = idx[j]
+        in_left = left[tuple(idx)]
+        idx_in = list(idx)
+        idx_in[j] = np.where(in_left, edge, edge + 1)
+        idx_node = list(idx)
+        idx_node[j] = np.clip(edge - 1, 0, n - 1)
+        brackets.append((idx, edge, np.where(in_left, pos[edge], pos[edge + 1]),
+                         np.where(in_left, pos[edge + 1], pos[edge]), g[(slice(None),) + tuple(idx_in)],
+                         _node_poses(axes, idx_node)))
+    sizes = [b[1].size for b in brackets]
+    crossing, value = _bisect(values, np.vstack([b[5] for b in brackets]),
+                              np.repeat(sampled, sizes), np.concatenate([b[2] for b in brackets]),
+                              np.concatenate([b[3] for b in brackets]),
+                              np.concatenate([b[4] for b in brackets], axis=1), steps)
+    out = []
+    start = 0
+    for (j, n, *_), (idx, edge, *_) in zip(ext, brackets):
+        stop = start + edge.size
+        minus, plus = np.full(inside.shape, np.inf), np.full(inside.shape, np.inf)
+        at_minus, at_plus = np.zeros((k,) + inside.shape), np.zeros((k,) + inside.shape)
+        for node, side, at_side, sign in ((edge - 1, plus, at_plus, 1.0), (edge, minus, at_minus, -1.0)):
+            # the node left of the crossing sees it on its plus side, the one right of it on its minus side
+            keep = (node >= 0) & (node < n)
+            at = [i[keep] for i in idx]
+            at[j] = node[keep]
+            side[tuple(at)] = sign * (crossing[start:stop][keep] - axes[j][node[keep]])
+            at_side[(slice(None),) + tuple(at)] = value[:, start:stop][:, keep]
+        out.append((minus, plus, at_minus, at_plus))
+        start = stop
+    return out
 
 
 def _integrands(inside: np.ndarray, weight: np.ndarray, ic: np.ndarray, count: int = 2
@@ -480,9 +529,8 @@ def _boundary_corrected_sums(values: _PointValues, axes: list[np.ndarray],
     nearest = np.empty((n_sampled,) + inside.shape)
     toward = np.empty((n_sampled,) + inside.shape)
     crossing_values = np.empty((n_sampled, 2) + inside.shape)
-    for k, j in enumerate(sampled):
-        minus, plus, at_minus, at_plus = _edge_crossings(
-            values, axes, inside, (f0, f1), j, (float(box[0][j]), float(box[1][j])), steps)
+    crossings = _edge_crossings(values, axes, inside, (f0, f1), sampled, box, steps)
+    for k, (j, (minus, plus, at_minus, at_plus)) in enumerate(zip(sampled, crossings)):
         step = float(box[1][j] - box[0][j]) / resolution
         nearest[k] = np.minimum(minus, plus) / step  # in cell units
         toward[k] = np.where(plus < minus, 1.0, -1.0)
@@ -537,6 +585,64 @@ def _boundary_corrected_sums(values: _PointValues, axes: list[np.ndarray],
     return weight_sum + totals[0], ic_sum + totals[1]
 
 
+#: the grid of ``method="grid"`` spans the workspace's extent found on a grid of
+#: ``1 / COARSE`` the resolution, widened by one of its cells on each side
+COARSE = 2
+
+
+def _occupied_box(values: _PointValues, mechanism: Mechanism, resolution: int,
+                  orientation: tuple[float, float], fixed: dict[str, float], exact: int | None,
+                  box: tuple[np.ndarray, np.ndarray], sampled: list[int], steps: int
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """The pose box narrowed, along each sampled axis, to the workspace's extent.
+
+    Why: a mechanism's box is a bound from the geometry and the workspace may
+    fill a fraction of it (Tricept: c in about 300-650 of 0-926 mm); the grid's
+    cells then go where the workspace is. On a grid of ``resolution // COARSE``
+    the extent along axis j is the lowest / highest boundary crossing along j,
+    found by bisecting the edges below the lowest (above the highest) layer of
+    inside nodes, widened by one coarse cell (the extreme may lie between
+    coarse grid lines) and clipped to the box; a workspace in the first or
+    last layer keeps that face. Each crossing moves continuously with the
+    design (to the bisection's resolution), and so does their minimum: the
+    grid, and the integral, stay continuous. An empty coarse grid keeps the box.
+    """
+    coarse = max(resolution // COARSE, 4)
+    axes, _ = _grid_axes(mechanism, coarse, orientation, fixed, 0.5, exact, box)
+    shape = tuple(len(a) for a in axes)
+    inside = np.concatenate([values(_grid_poses(axes, start, stop))[0]
+                             for start, stop in _chunk_bounds(axes)]).reshape(shape)
+    lo, hi = box[0].astype(float).copy(), box[1].astype(float).copy()
+    if not inside.any():
+        return lo, hi
+    jobs = []  # (axis, side, probes, p_in, p_out)
+    for j in sampled:
+        other = tuple(k for k in range(len(shape)) if k != j)
+        layers = np.nonzero(inside.any(axis=other))[0]
+        for side, layer, beyond in (("lo", layers[0], layers[0] - 1), ("hi", layers[-1], layers[-1] + 1)):
+            if beyond < 0 or beyond >= shape[j]:
+                continue  # the workspace reaches the end layer: keep the face
+            idx = list(np.nonzero(np.take(inside, [layer], axis=j)))
+            idx[j] = np.full(idx[0].size, layer)
+            jobs.append((j, side, _node_poses(axes, idx), np.full(idx[0].size, axes[j][layer]),
+                         np.full(idx[0].size, axes[j][beyond])))
+    if jobs:
+        crossing, _ = _bisect(values, np.vstack([job[2] for job in jobs]),
+                              np.concatenate([np.full(job[3].size, job[0]) for job in jobs]),
+                              np.concatenate([job[3] for job in jobs]), np.concatenate([job[4] for job in jobs]),
+                              np.zeros((0, sum(job[3].size for job in jobs))), steps)
+        start = 0
+        for j, side, _, p_in, _ in jobs:
+            stop = start + p_in.size
+            step = (float(box[1][j]) - float(box[0][j])) / coarse
+            if side == "lo":
+                lo[j] = max(float(box[0][j]), float(crossing[start:stop].min()) - step)
+            else:
+                hi[j] = min(float(box[1][j]), float(crossing[start:stop].max()) + step)
+            start = stop
+    return lo, hi
+
+
 def _integrate_grid(mechanism, resolution, orientation, min_ic, length, fixed, keep_samples,
                     offset=0.5, refine=True, steps=BISECTIONS):
     """Integration on a regular grid; one axis exactly when the mechanism allows it.
@@ -563,15 +669,17 @@ def _integrate_grid(mechanism, resolution, orientation, min_ic, length, fixed, k
     """
     exact = _exact_axis(mechanism, fixed)
     box = mechanism.pose_bounds(orientation)
-    axes, cell = _grid_axes(mechanism, resolution, orientation, fixed, offset, exact, box)
     sampled = _sampled_indices(mechanism, orientation, fixed, exact) if refine else []
+    values = _PointValues(mechanism, exact, box, orientation, min_ic, length)
+    if sampled:
+        box = _occupied_box(values, mechanism, resolution, orientation, fixed, exact, box, sampled, steps)
+    axes, cell = _grid_axes(mechanism, resolution, orientation, fixed, offset, exact, box)
     shape = tuple(len(a) for a in axes)
     total = int(np.prod(shape))
     # the grid's angular nodes all lie in the orientation box (it spans the box): then the
     # fused path needs no per-node orientation test
     oriented = all(axis.min() >= orientation[0] and axis.max() <= orientation[1]
                    for axis, angular in zip(axes, mechanism.angular) if angular)
-    values = _PointValues(mechanism, exact, box, orientation, min_ic, length)
     parts = []
     kept = []
     for start, stop in _chunk_bounds(axes):

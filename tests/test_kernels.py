@@ -47,7 +47,9 @@ def test_evaluation_matches_the_numpy_reference(name, extra, options):
     assert fast.n_inside == reference.n_inside
     for field in FIELDS:
         a, b = getattr(fast, field), getattr(reference, field)
-        assert a == pytest.approx(b, rel=1e-12, abs=1e-300), field
+        # an error estimate is a difference of two integrals: rounding of the integrals, not of it
+        scale = getattr(reference, field.removesuffix("_error")) if field.endswith("_error") else 0.0
+        assert a == pytest.approx(b, rel=1e-12, abs=max(1e-12 * scale, 1e-300)), field
 
 
 def random_matrices(n: int, count: int, seed: int) -> np.ndarray:
