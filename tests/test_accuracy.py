@@ -1,0 +1,155 @@
+"""Accuracy and continuity of the workspace integral (method "grid", docs/accuracy.md)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from kinematics import MECHANISMS, get_mechanism
+from kinematics.workspace import _cube_fraction, default_resolution, evaluate
+from tests.conftest import PAPER_DESIGNS
+
+#: documented optima (docs/reproduction.md) where a design vector is printed
+OPTIMA = {
+    "h4": dict(d=13.52484, h=13.88781, Qz=35.18892),  # seed 000 Table 1 design
+    "tricept": dict(a=200.1, b=300.0, d=191.3),  # max-volume optimum, docs/reproduction.md
+}
+TARGET = 1e-3  # 0.1 %
+W_D = 0.5
+
+
+def random_design(name: str, seed: int):
+    """A design drawn uniformly from the design box (seeded), with a non-empty workspace."""
+    cls = MECHANISMS[name]
+    rng = np.random.default_rng(seed)
+    while True:
+        x = np.array([rng.uniform(v.lower, v.upper) for v in cls.design_variables])
+        mech = cls.from_design(x, **cls.default_fixed)
+        if evaluate(mech, resolution=12, error_estimate=False).volume > 0:
+            return mech
+
+
+# ------------------------------------------------------------ cut cells
+@pytest.mark.parametrize("dims", [1, 2, 3])
+def test_cut_cell_fraction_and_centroid_match_monte_carlo(dims):
+    rng = np.random.default_rng(dims)
+    slopes = rng.uniform(0.5, 6.0, size=(20, dims)) * (rng.uniform(size=(20, dims)) < 0.8)
+    slopes[:, 0] = np.maximum(slopes[:, 0], 0.5)  # at least one crossing
+    fraction, centroid = _cube_fraction(slopes)
+    points = rng.uniform(-0.5, 0.5, size=(200_000, dims))
+    for c, f, g in zip(slopes, fraction, centroid):
+        # the node's side of the plane through the crossings u_j = 1 / c_j: c . u < 1
+        side = points @ c < 1.0
+        assert f == pytest.approx(side.mean(), abs=4e-3)
+        if side.any():
+            np.testing.assert_allclose(g, points[side].mean(axis=0), atol=5e-3)
+
+
+def test_cut_cell_through_the_centre_is_half_from_either_side():
+    """The continuity of the method: a boundary on a node gives that node's cell half, whatever
+    the plane's direction."""
+    fraction, centroid = _cube_fraction(np.array([[1e4, 0.0, 0.0], [1e4, 3.0, 0.7], [1e4, 1e4, 1e4]]))
+    np.testing.assert_allclose(fraction, 0.5, atol=2e-4)
+
+
+def test_rpr2_area_to_5e4_at_half_the_default():
+    m = get_mechanism("rpr2", **PAPER_DESIGNS["rpr2"])
+    ev = evaluate(m, resolution=200, min_inverse_condition=0.0, error_estimate=False)
+    old = evaluate(m, resolution=200, min_inverse_condition=0.0, error_estimate=False, method="midpoint")
+    assert ev.volume == pytest.approx(m.exact_area(), rel=5e-4)
+    assert abs(ev.volume - m.exact_area()) < abs(old.volume - m.exact_area()) / 3
+
+
+@pytest.mark.parametrize("degrees", [15, 45])
+def test_rpr3_constant_orientation_area_to_1e3_at_half_the_default(degrees):
+    m = get_mechanism("rpr3", **PAPER_DESIGNS["rpr3"])
+    phi = math.radians(degrees)
+    ev = evaluate(m, orientation=(phi, phi), min_inverse_condition=0.0, resolution=90, error_estimate=False)
+    assert ev.volume == pytest.approx(m.exact_area(phi), rel=1e-3)
+
+
+# --------------------------------------------------- default vs reference
+#: measured misses of the 0.1 % target (benchmarks/accuracy.py); strict: they fail today
+KNOWN_MISSES = {
+    ("rpr3", "paper"): "3-RPR paper design: GDI 0.19 % at the default (0.1 % at 40)",
+}
+
+
+def _cases():
+    out = []
+    for name in sorted(MECHANISMS):
+        for label in ("paper", "optimum", "random"):
+            if label == "optimum" and name not in OPTIMA:
+                continue
+            reason = KNOWN_MISSES.get((name, label))
+            marks = [pytest.mark.slow] + ([pytest.mark.xfail(strict=True, reason=reason)] if reason else [])
+            out.append(pytest.param(name, label, marks=marks, id=f"{name}-{label}"))
+    return out
+
+
+@pytest.mark.parametrize("name, label", _cases())
+def test_default_resolution_within_0p1_percent_of_a_fine_reference(name, label):
+    if label == "paper":
+        mech = get_mechanism(name, **PAPER_DESIGNS[name])
+    elif label == "optimum":
+        mech = get_mechanism(name, **OPTIMA[name])
+    else:
+        mech = random_design(name, seed=1)
+    ev = evaluate(mech, error_estimate=False)
+    ref = evaluate(mech, resolution=4 * default_resolution(mech), error_estimate=False)
+    assert ev.volume == pytest.approx(ref.volume, rel=TARGET)
+    assert ev.gdi == pytest.approx(ref.gdi, rel=TARGET)
+    assert ev.mixed(W_D) == pytest.approx(ref.mixed(W_D), rel=TARGET)
+
+
+# ------------------------------------------------------------ continuity
+def eta_along_a_line(name: str, method: str, points: int = 15) -> np.ndarray:
+    """eta (w_d = 0.5) along one design variable, steps of 0.05 % of its range, through the
+    documented optimum (Tricept: d) or the middle of the design box."""
+    cls = MECHANISMS[name]
+    lo = np.array([v.lower for v in cls.design_variables])
+    hi = np.array([v.upper for v in cls.design_variables])
+    centre, j = (np.array([200.1, 300.0, 191.3]), 2) if name == "tricept" else (0.5 * (lo + hi), 0)
+    out = []
+    for k in range(points):
+        x = centre.copy()
+        x[j] += (k - points // 2) * 5e-4 * (hi[j] - lo[j])
+        out.append(evaluate(cls.from_design(x, **cls.default_fixed), method=method, error_estimate=False).mixed(W_D))
+    return np.array(out)
+
+
+def has_a_step(eta: np.ndarray) -> bool:
+    """A change between neighbouring points larger than twice the typical one (the median), with
+    a floor of 1e-5 of eta for a flat stretch."""
+    change = np.abs(np.diff(eta))
+    return bool(change.max() > 2.0 * np.median(change) + 1e-5 * np.abs(eta).mean())
+
+
+@pytest.mark.parametrize("name", [
+    "h4", "tricept", "delta", "rpr2",
+    pytest.param("rpr3", marks=pytest.mark.xfail(strict=True, reason="3-RPR: changes of 6e-4 of eta between "
+                                                 "neighbours of a 2e-4 trend (noise of the grid, cause open)")),
+])
+def test_eta_along_a_line_has_no_steps(name):
+    assert not has_a_step(eta_along_a_line(name, "grid"))
+
+
+@pytest.mark.parametrize("name", ["h4", "tricept", "delta", "rpr3"])
+def test_the_cell_centre_count_has_steps(name):
+    """The test above can fail: on the old count it does (2-RPR's 400 x 400 count is smooth enough)."""
+    assert has_a_step(eta_along_a_line(name, "midpoint"))
+
+
+# ------------------------------------------------------------ error bars
+@pytest.mark.slow
+def test_every_evaluation_carries_its_error_estimate():
+    mech = get_mechanism("tricept", **OPTIMA["tricept"])
+    ev = evaluate(mech)
+    assert ev.volume_error > 0 and ev.gdi_error > 0
+    assert ev.mixed_error(W_D) == pytest.approx(W_D * ev.gdi_error + (1 - W_D) * ev.volume_error / ev.reference_volume)
+    ref = evaluate(mech, resolution=4 * ev.resolution, error_estimate=False)
+    assert abs(ev.volume - ref.volume) <= 3 * ev.volume_error
+    with pytest.raises(ValueError, match="w_d must be in"):
+        ev.mixed_error(1.5)
