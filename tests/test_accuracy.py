@@ -38,13 +38,13 @@ def test_cut_cell_fraction_and_centroid_match_monte_carlo(dims):
     slopes = rng.uniform(0.5, 6.0, size=(20, dims)) * (rng.uniform(size=(20, dims)) < 0.8)
     slopes[:, 0] = np.maximum(slopes[:, 0], 0.5)  # at least one crossing
     fraction, centroid = _cube_fraction(slopes)
-    points = rng.uniform(-0.5, 0.5, size=(200_000, dims))
+    points = rng.uniform(-0.5, 0.5, size=(100_000, dims))
     for c, f, g in zip(slopes, fraction, centroid):
         # the node's side of the plane through the crossings u_j = 1 / c_j: c . u < 1
         side = points @ c < 1.0
-        assert f == pytest.approx(side.mean(), abs=4e-3)
+        assert f == pytest.approx(side.mean(), abs=6e-3)
         if side.any():
-            np.testing.assert_allclose(g, points[side].mean(axis=0), atol=5e-3)
+            np.testing.assert_allclose(g, points[side].mean(axis=0), atol=8e-3)
 
 
 def test_cut_cell_through_the_centre_is_half_from_either_side():
@@ -54,6 +54,7 @@ def test_cut_cell_through_the_centre_is_half_from_either_side():
     np.testing.assert_allclose(fraction, 0.5, atol=2e-4)
 
 
+@pytest.mark.slow
 def test_rpr2_area_to_5e4_at_half_the_default():
     m = get_mechanism("rpr2", **PAPER_DESIGNS["rpr2"])
     ev = evaluate(m, resolution=200, min_inverse_condition=0.0, error_estimate=False)
@@ -127,6 +128,7 @@ def has_a_step(eta: np.ndarray) -> bool:
     return bool(change.max() > 2.0 * np.median(change) + 1e-5 * np.abs(eta).mean())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", [
     "h4", "tricept", "delta", "rpr2",
     pytest.param("rpr3", marks=pytest.mark.xfail(strict=True, reason="3-RPR: changes of 6e-4 of eta between "
@@ -136,6 +138,7 @@ def test_eta_along_a_line_has_no_steps(name):
     assert not has_a_step(eta_along_a_line(name, "grid"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["h4", "tricept", "delta", "rpr3"])
 def test_the_cell_centre_count_has_steps(name):
     """The test above can fail: on the old count it does (2-RPR's 400 x 400 count is smooth enough)."""
