@@ -53,6 +53,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from kinematics import kernels
 from kinematics.base import Mechanism
 from kinematics.rows import row_all
 
@@ -548,6 +549,8 @@ def _boundary_corrected_sums(values: _PointValues, axes: list[np.ndarray],
     """``sum_cells fraction * f`` for ``f0`` (weight) and ``f1`` (weight / kappa), node arrays
     in the grid's shape (0 outside): each boundary cell counts its inside fraction times
     ``f`` at the centroid of its inside part (see :func:`_integrate_grid`)."""
+    if kernels.compiled():
+        return _boundary_corrected_sums_compiled(values, axes, box, resolution, sampled, inside, f0, f1, steps)
     n_sampled = len(sampled)
     nearest = np.empty((n_sampled,) + inside.shape)
     toward = np.empty((n_sampled,) + inside.shape)
@@ -608,6 +611,251 @@ def _boundary_corrected_sums(values: _PointValues, axes: list[np.ndarray],
     return weight_sum + totals[0], ic_sum + totals[1]
 
 
+@kernels.inline_jit
+def _plane_cut(c, fraction_centroid):
+    """:func:`_cube_fraction` of one cell: slopes ``c`` (d,) in, ``fraction_centroid`` (d + 1,)
+    out (the fraction, then the centroid per axis; 0 along axes of zero slope)."""
+    d = c.shape[0]
+    active = np.empty(d, dtype=np.int64)
+    n_active = 0
+    for j in range(d):
+        fraction_centroid[j + 1] = 0.0
+        if c[j] > 0.0:
+            active[n_active] = j
+            n_active += 1
+    fraction_centroid[0] = 1.0
+    if n_active == 0:
+        return
+    bound = 1.0
+    scale = 1.0
+    for a in range(n_active):
+        bound += 0.5 * c[active[a]]
+        scale *= c[active[a]] * (a + 1)  # d! prod c
+    volume = 0.0
+    integral = 0.0
+    moment = np.zeros(n_active)
+    for corner in range(1 << n_active):
+        level = bound
+        parity = 0
+        for a in range(n_active):
+            if (corner >> a) & 1:
+                level -= c[active[a]]
+                parity += 1
+        if level <= 0.0:
+            continue
+        sign = -1.0 if parity % 2 else 1.0
+        power = level**n_active
+        volume += sign * power
+        integral += sign * power * level
+        for a in range(n_active):
+            if (corner >> a) & 1:
+                moment[a] += sign * power
+    volume /= scale
+    integral /= scale * (n_active + 1)
+    fraction_centroid[0] = min(max(volume, 0.0), 1.0)
+    if volume > 0.0:
+        for a in range(n_active):
+            part = (moment[a] / scale + integral / c[active[a]]) / volume - 0.5
+            fraction_centroid[active[a] + 1] = min(max(part, -0.5), 0.5)
+
+
+@kernels.jit
+def _cut_cell_sums(inside, f0, f1, nearest, toward, crossing_values, strides, sizes, max_slope):
+    """Compiled :func:`_boundary_corrected_sums` after the crossings: per node (flat index)
+    ``inside`` (N,), integrands ``f0``, ``f1`` (N,), and per sampled axis k the distance
+    ``nearest`` (d, N) to the nearest crossing in cell units (inf: none), its direction
+    ``toward`` (d, N) and the integrands there ``crossing_values`` (d, 2, N); ``strides`` and
+    ``sizes`` (d,) of the sampled axes in the flat index. Returns the two sums."""
+    d, count = nearest.shape
+    c = np.empty(d)
+    cut = np.empty(d + 1)
+    total0 = 0.0
+    total1 = 0.0
+    for p in range(count):
+        near = -1
+        for k in range(d):
+            dist = nearest[k, p]
+            if dist < np.inf:
+                c[k] = min(1.0 / dist, max_slope) if dist > 0.0 else max_slope
+                if near < 0 or c[k] > c[near]:
+                    near = k
+            else:
+                c[k] = 0.0
+        if near < 0:
+            total0 += f0[p]
+            total1 += f1[p]
+            continue
+        _plane_cut(c, cut)
+        own = cut[0]
+        along = cut[near + 1]
+        if inside[p]:
+            fraction = own
+        else:
+            fraction = 1.0 - own
+            along = -along * own / (1.0 - own) if own < 1.0 else 0.0
+        sign = int(toward[near, p])
+        stride = strides[near]
+        coordinate = (p // stride) % sizes[near]
+        if inside[p]:
+            behind = coordinate - sign
+            has_behind = 0 <= behind < sizes[near] and inside[p - sign * stride]
+            v0, v1 = f0[p], f1[p]
+            if has_behind:
+                q = p - sign * stride
+                v0 += along * (f0[p] - f0[q])
+                v1 += along * (f1[p] - f1[q])
+        else:
+            q = p + sign * stride
+            at_crossing = 1.0 / c[near]
+            t = 0.0
+            if at_crossing < 1.0:
+                t = min(max((along - at_crossing) / (1.0 - at_crossing), 0.0), 1.0)
+            x0, x1 = crossing_values[near, 0, p], crossing_values[near, 1, p]
+            v0 = x0 + t * (f0[q] - x0)
+            v1 = x1 + t * (f1[q] - x1)
+        total0 += fraction * max(v0, 0.0)
+        total1 += fraction * max(v1, 0.0)
+    return total0, total1
+
+
+def _boundary_corrected_sums_compiled(values: _PointValues, axes: list[np.ndarray],
+                                      box: tuple[np.ndarray, np.ndarray], resolution: int,
+                                      sampled: list[int], inside: np.ndarray, f0: np.ndarray,
+                                      f1: np.ndarray, steps: int) -> tuple[float, float]:
+    """:func:`_boundary_corrected_sums` with the bookkeeping compiled: the faces to test
+    (:func:`_face_nodes`), the brackets (:func:`_brackets`), the nearest crossing per node and
+    axis (:func:`_nearest_crossings`) and the cut cells (:func:`_cut_cell_sums`) work on flat
+    node indices; the poses are evaluated in one call per bisection step, as in the numpy path."""
+    shape = inside.shape
+    flat_inside = np.ascontiguousarray(inside.ravel())
+    f0, f1 = np.ascontiguousarray(f0.ravel()), np.ascontiguousarray(f1.ravel())
+    strides = np.array([math.prod(shape[j + 1:]) for j in sampled], dtype=np.int64)
+    sizes = np.array([shape[j] for j in sampled], dtype=np.int64)
+    positions = np.zeros((len(sampled), int(sizes.max()) + 2))
+    for k, j in enumerate(sampled):  # the face, the nodes, the face
+        positions[k, 0], positions[k, sizes[k] + 1] = float(box[0][j]), float(box[1][j])
+        positions[k, 1:sizes[k] + 1] = axes[j]
+    steps_of = (positions[np.arange(len(sampled)), sizes + 1] - positions[:, 0]) / resolution
+    column = np.asarray(sampled, dtype=np.int64)
+
+    def poses_of(nodes: np.ndarray, axis: np.ndarray, at: np.ndarray) -> np.ndarray:
+        poses = _node_poses(axes, list(np.unravel_index(nodes, shape)))
+        poses[np.arange(nodes.size), column[axis]] = at
+        return poses
+
+    face_axis, face_side, face_node = _face_nodes(flat_inside, strides, sizes)
+    face_state = np.zeros((3, len(sampled), 2, flat_inside.size))  # inside, f0, f1 at the faces
+    if face_node.size:
+        inside_f, weight_f, ic_f, _ = values(poses_of(face_node, face_axis,
+                                                      positions[face_axis, face_side * (sizes[face_axis] + 1)]))
+        for m, fm in enumerate((inside_f,) + _integrands(inside_f, weight_f, ic_f)):
+            face_state[m, face_axis, face_side, face_node] = fm
+    axis, left, right, p_in, p_out, start = _brackets(flat_inside, f0, f1, face_state, strides, sizes, positions)
+    crossing, value = _bisect(values, poses_of(np.where(left >= 0, left, right), axis, p_in), column[axis],
+                              p_in, p_out, start, steps)
+    nearest, toward, crossing_values = _nearest_crossings(axis, left, right, crossing, value, positions,
+                                                          strides, sizes, steps_of, flat_inside.size)
+    return _cut_cell_sums(flat_inside, f0, f1, nearest, toward, crossing_values, strides, sizes, _MAX_SLOPE)
+
+
+@kernels.jit
+def _face_nodes(inside, strides, sizes):
+    """Inside end nodes (flat index) along each sampled axis, whose face is to be tested:
+    ``(axis, side, node)`` arrays, side 0 the lower face, 1 the upper."""
+    d = strides.shape[0]
+    count = 0
+    for p in range(inside.shape[0]):
+        if inside[p]:
+            for k in range(d):
+                coordinate = (p // strides[k]) % sizes[k]
+                count += (coordinate == 0) + (coordinate == sizes[k] - 1)
+    axis = np.empty(count, dtype=np.int64)
+    side = np.empty(count, dtype=np.int64)
+    node = np.empty(count, dtype=np.int64)
+    i = 0
+    for p in range(inside.shape[0]):
+        if inside[p]:
+            for k in range(d):
+                coordinate = (p // strides[k]) % sizes[k]
+                for s, end in ((0, 0), (1, sizes[k] - 1)):
+                    if coordinate == end:
+                        axis[i], side[i], node[i] = k, s, p
+                        i += 1
+    return axis, side, node
+
+
+@kernels.jit
+def _brackets(inside, f0, f1, face_state, strides, sizes, positions):
+    """Every grid edge (and half edge to a face) whose ends differ in membership: its axis,
+    the node left and right of it (flat index, -1 for a face), the inside and outside end's
+    position along the axis and the integrands ``(2, M)`` at the inside end."""
+    d = strides.shape[0]
+    n = inside.shape[0]
+    count = 0
+    for p in range(n):
+        for k in range(d):
+            coordinate = (p // strides[k]) % sizes[k]
+            if coordinate < sizes[k] - 1 and inside[p] != inside[p + strides[k]]:
+                count += 1
+            if inside[p] and coordinate == 0 and face_state[0, k, 0, p] == 0.0:
+                count += 1
+            if inside[p] and coordinate == sizes[k] - 1 and face_state[0, k, 1, p] == 0.0:
+                count += 1
+    axis = np.empty(count, dtype=np.int64)
+    left = np.empty(count, dtype=np.int64)
+    right = np.empty(count, dtype=np.int64)
+    p_in = np.empty(count)
+    p_out = np.empty(count)
+    start = np.empty((2, count))
+    i = 0
+    for p in range(n):
+        for k in range(d):
+            coordinate = (p // strides[k]) % sizes[k]
+            here = positions[k, coordinate + 1]
+            if inside[p] and coordinate == 0 and face_state[0, k, 0, p] == 0.0:
+                axis[i], left[i], right[i] = k, -1, p
+                p_in[i], p_out[i] = here, positions[k, 0]
+                start[0, i], start[1, i] = f0[p], f1[p]
+                i += 1
+            if coordinate < sizes[k] - 1 and inside[p] != inside[p + strides[k]]:
+                q = p + strides[k]
+                there = positions[k, coordinate + 2]
+                axis[i], left[i], right[i] = k, p, q
+                inner = p if inside[p] else q
+                p_in[i], p_out[i] = (here, there) if inside[p] else (there, here)
+                start[0, i], start[1, i] = f0[inner], f1[inner]
+                i += 1
+            if inside[p] and coordinate == sizes[k] - 1 and face_state[0, k, 1, p] == 0.0:
+                axis[i], left[i], right[i] = k, p, -1
+                p_in[i], p_out[i] = here, positions[k, sizes[k] + 1]
+                start[0, i], start[1, i] = f0[p], f1[p]
+                i += 1
+    return axis, left, right, p_in, p_out, start
+
+
+@kernels.jit
+def _nearest_crossings(axis, left, right, crossing, value, positions, strides, sizes, steps_of, n):
+    """Per node and sampled axis: the distance (cell units) to the nearer of its two crossings
+    (inf: none), its direction (+-1) and the integrands there ``(d, 2, n)``; on a tie the
+    crossing below wins, as in the numpy path."""
+    d = strides.shape[0]
+    nearest = np.full((d, n), np.inf)
+    toward = np.full((d, n), -1.0)
+    values = np.zeros((d, 2, n))
+    for i in range(axis.shape[0]):
+        k = axis[i]
+        for node, sign in ((left[i], 1.0), (right[i], -1.0)):
+            if node < 0:
+                continue
+            coordinate = (node // strides[k]) % sizes[k]
+            dist = sign * (crossing[i] - positions[k, coordinate + 1]) / steps_of[k]
+            if dist < nearest[k, node] or (sign < 0.0 and dist == nearest[k, node]):
+                nearest[k, node] = dist
+                toward[k, node] = sign
+                values[k, 0, node], values[k, 1, node] = value[0, i], value[1, i]
+    return nearest, toward, values
+
+
 #: the grid of ``method="grid"`` spans the workspace's extent found on a grid of
 #: ``1 / COARSE`` the resolution, widened by one of its cells on each side
 COARSE = 2
@@ -615,7 +863,7 @@ COARSE = 2
 
 def _occupied_box(values: _PointValues, mechanism: Mechanism, resolution: int,
                   orientation: tuple[float, float], fixed: dict[str, float], exact: int | None,
-                  box: tuple[np.ndarray, np.ndarray], sampled: list[int], steps: int = 24
+                  box: tuple[np.ndarray, np.ndarray], sampled: list[int], steps: int = 12
                   ) -> tuple[np.ndarray, np.ndarray]:
     """The pose box narrowed, along each sampled axis, to the workspace's extent.
 
