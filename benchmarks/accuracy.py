@@ -168,7 +168,8 @@ def study(name: str) -> dict:
             for _ in range(REPEATS):  # old and new alternately: the machine's load hits both alike
                 for method in errors:
                     best[method] = min(best[method], best_time(
-                        lambda: evaluate(mech, resolution=res, method=method, error_estimate=False), 1))
+                        lambda m=mech, r=res, k=method: evaluate(m, resolution=r, method=k, error_estimate=False),
+                        1))
             for method in errors:
                 seconds[method].append(best[method])
         for method in errors:
