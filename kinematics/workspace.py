@@ -928,17 +928,17 @@ def _integrate_grid(mechanism, resolution, orientation, min_ic, length, fixed, k
     the GDI the weighted mean of 1/kappa; its error is first order in the grid
     step and it jumps whenever the boundary crosses a node.
 
-    ``refine=True`` (``method="grid"``): the same cells, each counted with the
-    fraction of it inside the workspace. On every grid edge (and half edge to
-    the box face) whose ends differ in membership the boundary crossing is
-    located by bisection (:func:`_edge_crossings`); a node next to crossings
-    takes the boundary as the plane through the nearest crossing along each
-    axis and counts the part of its cell on its own side
-    (:func:`_cube_fraction`). Exact for a planar boundary, second order for a
-    smooth one, and continuous in the design: when the boundary crosses a node
-    the plane passes through the node and the fraction is 1/2 from either
-    side. A cell part with an outside node is weighted by the values at the
-    inside ends of its crossings.
+    ``refine=True`` (``method="grid"``): the grid spans the workspace's extent
+    (:func:`_occupied_box`), and each cell counts with the fraction of it inside
+    the workspace. On every grid edge (and half edge to the box face) whose ends
+    differ in membership the boundary crossing is located by bisection
+    (:func:`_edge_crossings`); a node next to crossings takes the boundary as the
+    plane through the nearest crossing along each axis and counts the part of its
+    cell on the workspace's side (:func:`_cube_fraction`), with the integrand at
+    that part's centroid (:func:`_boundary_corrected_sums`). Exact for a planar
+    boundary, second order for a smooth one, and continuous in the design: when
+    the boundary crosses a node the plane passes through the node and the
+    fraction is 1/2 from either side. ``steps``: bisections per crossing.
     """
     exact = _exact_axis(mechanism, fixed)
     box = mechanism.pose_bounds(orientation)
