@@ -27,7 +27,7 @@ def random_design(name: str, seed: int):
     while True:
         x = np.array([rng.uniform(v.lower, v.upper) for v in cls.design_variables])
         mech = cls.from_design(x, **cls.default_fixed)
-        if evaluate(mech, resolution=12, error_estimate=False).volume > 0:
+        if evaluate(mech, resolution=12, error_estimate=False, method="grid").volume > 0:
             return mech
 
 
@@ -57,7 +57,7 @@ def test_cut_cell_through_the_centre_is_half_from_either_side():
 @pytest.mark.slow
 def test_rpr2_area_to_5e4_at_half_the_default():
     m = get_mechanism("rpr2", **PAPER_DESIGNS["rpr2"])
-    ev = evaluate(m, resolution=200, min_inverse_condition=0.0, error_estimate=False)
+    ev = evaluate(m, resolution=200, min_inverse_condition=0.0, error_estimate=False, method="grid")
     old = evaluate(m, resolution=200, min_inverse_condition=0.0, error_estimate=False, method="midpoint")
     assert ev.volume == pytest.approx(m.exact_area(), rel=5e-4)
     assert abs(ev.volume - m.exact_area()) < abs(old.volume - m.exact_area()) / 3
@@ -67,7 +67,8 @@ def test_rpr2_area_to_5e4_at_half_the_default():
 def test_rpr3_constant_orientation_area_to_1e3_at_half_the_default(degrees):
     m = get_mechanism("rpr3", **PAPER_DESIGNS["rpr3"])
     phi = math.radians(degrees)
-    ev = evaluate(m, orientation=(phi, phi), min_inverse_condition=0.0, resolution=90, error_estimate=False)
+    ev = evaluate(m, orientation=(phi, phi), min_inverse_condition=0.0, resolution=90, error_estimate=False,
+                  method="grid")
     assert ev.volume == pytest.approx(m.exact_area(phi), rel=1e-3)
 
 
@@ -98,8 +99,8 @@ def test_default_resolution_within_0p1_percent_of_a_fine_reference(name, label):
         mech = get_mechanism(name, **OPTIMA[name])
     else:
         mech = random_design(name, seed=1)
-    ev = evaluate(mech, error_estimate=False)
-    ref = evaluate(mech, resolution=4 * default_resolution(mech), error_estimate=False)
+    ev = evaluate(mech, error_estimate=False, method="grid")
+    ref = evaluate(mech, resolution=4 * default_resolution(mech), error_estimate=False, method="grid")
     assert ev.volume == pytest.approx(ref.volume, rel=TARGET)
     assert ev.gdi == pytest.approx(ref.gdi, rel=TARGET)
     assert ev.mixed(W_D) == pytest.approx(ref.mixed(W_D), rel=TARGET)
@@ -149,10 +150,10 @@ def test_the_cell_centre_count_has_steps(name):
 @pytest.mark.slow
 def test_every_evaluation_carries_its_error_estimate():
     mech = get_mechanism("tricept", **OPTIMA["tricept"])
-    ev = evaluate(mech)
+    ev = evaluate(mech, method="grid")
     assert ev.volume_error > 0 and ev.gdi_error > 0
     assert ev.mixed_error(W_D) == pytest.approx(W_D * ev.gdi_error + (1 - W_D) * ev.volume_error / ev.reference_volume)
-    ref = evaluate(mech, resolution=4 * ev.resolution, error_estimate=False)
+    ref = evaluate(mech, resolution=4 * ev.resolution, error_estimate=False, method="grid")
     assert abs(ev.volume - ref.volume) <= 3 * ev.volume_error
     with pytest.raises(ValueError, match="w_d must be in"):
         ev.mixed_error(1.5)
