@@ -1,0 +1,593 @@
+"""Gough–Stewart platform, 6-UPS (six extensible legs; issue 24).
+
+Frame and units
+---------------
+Base frame: origin at the centre of the base joint circle, z normal to the
+base, up; the platform works above the base (z > 0, the upper assembly
+modes). Lengths in mm, angles in rad (degrees only for the constructor's
+angles, as the other mechanisms' limits).
+
+Pose ``(x, y, z, tilt_x, tilt_y, torsion)``: ``c = (x, y, z)`` is the centre of
+the platform joint circle, and the orientation is Bonev's tilt-and-torsion
+(Bonev & Ryu, Mech. Mach. Theory 36, 2001) written with the tilt as a
+horizontal rotation vector::
+
+    R = Exp([w]x) R_z(torsion),   w = (tilt_x, tilt_y, 0)
+
+i.e. a torsion about the platform normal, then a tilt by ``|w|`` about the
+horizontal axis ``w/|w|``. Bonev's azimuth phi and tilt theta are
+``w = theta (-sin phi, cos phi, 0)``. The tilt-vector form has no singularity
+at zero tilt, so an orientation box ``[lo, hi]^3`` (the workspace module's
+one range for every angle) is a square of tilt vectors times a torsion
+interval. Near the home pose ``tilt_x``, ``tilt_y``, ``torsion`` are the
+rotations about x, y, z.
+
+Geometry (the usual semi-regular hexagons)
+------------------------------------------
+Base joints on a circle of radius ``r_base`` in pairs centred at 0, 120,
+240 deg, the two joints of a pair ``sep_base`` apart; platform joints on a
+circle of radius ``r_platform`` in pairs centred at 60, 180, 300 deg,
+``sep_platform`` apart. Leg ``2k`` joins the base joint at
+``120k - sep_base/2`` to the platform joint at ``120k - 60 + sep_platform/2``,
+leg ``2k + 1`` joins ``120k + sep_base/2`` to ``120k + 60 - sep_platform/2``
+(each base pair reaches the two neighbouring platform pairs: the classic
+6-6 layout, a 3-3 octahedron when both separations tend to 0).
+
+* Inverse kinematics: ``L_i = c + R p_i - b_i``, ``q_i = |L_i|``,
+  ``u_i = L_i / q_i`` (Merlet, *Parallel Robots*, 2nd ed., 2006, Sec. 4.1).
+* Jacobian: ``q_dot_i = u_i . c_dot + ((R p_i) x u_i) . omega`` (the rows
+  ``[u_i^T, (R p_i x u_i)^T]`` of the inverse kinematic Jacobian in twist form,
+  Merlet Sec. 5.2, :meth:`GoughStewart.twist_jacobian`), and
+  ``omega = J_l(w) (w_dot) + (Exp(w) k) torsion_dot`` with ``J_l`` the left
+  Jacobian of SO(3), so :meth:`~kinematics.base.Mechanism.jacobian` is
+  ``d q / d pose`` in the pose coordinates above (the base's convention;
+  at zero tilt the two are equal).
+* Forward kinematics: Newton from a guess (:meth:`GoughStewart.forward_from`);
+  :meth:`~kinematics.base.Mechanism.forward` runs Newton from a deterministic
+  set of starts (:meth:`GoughStewart.assembly_modes`) to collect several
+  assembly modes. A general 6-6 platform has up to 40 (Dietmaier 1998):
+  multi-start Newton finds the ones whose basins the starts meet, not a
+  certified complete set.
+* Limits: leg lengths ``q_min..q_max``; passive-joint cone angles (angle between
+  the leg and the joint's axis) ``<= cone_base`` at the base (universal
+  joints) and ``<= cone_platform`` at the platform (spherical joints). The
+  joint axes are, with ``cone_reference="home"`` (default), the leg directions
+  at the home pose ``(0, 0, height, 0, 0, 0)`` (joints mounted along their leg,
+  the way hexapods are built to centre the joint range), or with
+  ``"normal"`` the base normal and the platform normal. Leg-leg collisions are
+  not modelled.
+
+Workspaces (see ``docs/gough_stewart.md``)
+-----------------------------------------
+* The pipeline-facing default, ``default_orientation = (0, 0)``: the
+  constant-orientation workspace at the home orientation, a 3-D volume in mm^3
+  over (x, y, z), 32^3 grid nodes.
+* :func:`constant_orientation_workspace`: the same at any fixed orientation;
+  :func:`orientation_workspace`: the rad^3 volume over (tilt_x, tilt_y,
+  torsion) at a fixed position; :func:`workspace_6d`: the 6-D volume in
+  mm^3 rad^3 over the pose coordinates above by randomised quasi-Monte-Carlo,
+  with a Student-t confidence interval over independent scramblings.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.stats import qmc, t as student_t
+
+from kinematics.algebra import newton_polish, unique_rows, wrap_angle
+from kinematics.base import (
+    DesignVariable,
+    Mechanism,
+    check_positive,
+    check_range,
+    orientation_measure,
+    sort_poses,
+)
+
+
+def _joint_angles(separation_deg: float, centres_deg: np.ndarray, signs: np.ndarray) -> np.ndarray:
+    """Angles (rad, (6,)) of joints ``centre + sign * separation / 2``."""
+    return np.radians(centres_deg + signs * 0.5 * separation_deg)
+
+
+#: leg order: pair centre and side of the base joint and of the platform joint of each leg (deg)
+_BASE_CENTRES = np.array([0.0, 0.0, 120.0, 120.0, 240.0, 240.0])
+_BASE_SIGNS = np.array([-1.0, 1.0, -1.0, 1.0, -1.0, 1.0])
+_PLATFORM_CENTRES = np.array([-60.0, 60.0, 60.0, 180.0, 180.0, 300.0])
+_PLATFORM_SIGNS = np.array([1.0, -1.0, 1.0, -1.0, 1.0, -1.0])
+
+
+def _hat(w: np.ndarray) -> np.ndarray:
+    """Skew matrices (N, 3, 3) of vectors (N, 3): ``hat(w) v = w x v``."""
+    zero = np.zeros(w.shape[0])
+    return np.stack([np.stack([zero, -w[:, 2], w[:, 1]], axis=-1),
+                     np.stack([w[:, 2], zero, -w[:, 0]], axis=-1),
+                     np.stack([-w[:, 1], w[:, 0], zero], axis=-1)], axis=-2)
+
+
+def _tilt_terms(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``sin t / t``, ``(1 - cos t) / t^2`` and ``(t - sin t) / t^3`` (each (N,)), stable at t = 0."""
+    a = np.sinc(theta / np.pi)
+    b = 0.5 * np.sinc(theta / (2.0 * np.pi)) ** 2
+    small = theta < 1e-3
+    t2 = np.where(small, theta * theta, 0.0)
+    safe = np.where(small, 1.0, theta)
+    c = np.where(small, 1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0, (safe - np.sin(safe)) / safe**3)
+    return a, b, c
+
+
+def rotation(poses: np.ndarray) -> np.ndarray:
+    """``R = Exp([w]x) R_z(torsion)`` (N, 3, 3) of poses (N, 6) (module docstring; rad)."""
+    poses = np.asarray(poses, dtype=float)
+    w = np.zeros((poses.shape[0], 3))
+    w[:, 0], w[:, 1] = poses[:, 3], poses[:, 4]
+    theta = np.hypot(w[:, 0], w[:, 1])
+    a, b, _ = _tilt_terms(theta)
+    hat = _hat(w)
+    tilt = np.eye(3) + a[:, None, None] * hat + b[:, None, None] * (hat @ hat)  # Rodrigues
+    cs, sn = np.cos(poses[:, 5]), np.sin(poses[:, 5])
+    zero, one = np.zeros_like(cs), np.ones_like(cs)
+    rz = np.stack([np.stack([cs, -sn, zero], -1), np.stack([sn, cs, zero], -1),
+                   np.stack([zero, zero, one], -1)], axis=-2)
+    return tilt @ rz
+
+
+def angular_velocity_map(poses: np.ndarray) -> np.ndarray:
+    """``M`` (N, 3, 3) with ``omega = M (tilt_x_dot, tilt_y_dot, torsion_dot)`` (rad/s per rad/s).
+
+    Columns: the left Jacobian of SO(3) ``J_l(w) = I + (1 - cos t)/t^2 [w]x + (t - sin t)/t^3 [w]x^2``
+    applied to x and y (the tilt vector's rate), and the platform normal ``Exp(w) k`` (torsion).
+    """
+    poses = np.asarray(poses, dtype=float)
+    w = np.zeros((poses.shape[0], 3))
+    w[:, 0], w[:, 1] = poses[:, 3], poses[:, 4]
+    theta = np.hypot(w[:, 0], w[:, 1])
+    a, b, c = _tilt_terms(theta)
+    hat = _hat(w)
+    hat2 = hat @ hat
+    left = np.eye(3) + b[:, None, None] * hat + c[:, None, None] * hat2
+    normal = (np.eye(3) + a[:, None, None] * hat + b[:, None, None] * hat2)[:, :, 2]
+    return np.concatenate([left[:, :, :2], normal[:, :, None]], axis=2)
+
+
+def canonical_orientation(poses: np.ndarray) -> np.ndarray:
+    """The same poses (N, 6) with tilt in [0, pi] and torsion in (-pi, pi].
+
+    A tilt vector of length ``t > pi`` is the rotation by ``t - 2 pi`` about the
+    same axis; torsion is periodic.
+    """
+    out = np.array(poses, dtype=float, copy=True)
+    theta = np.hypot(out[:, 3], out[:, 4])
+    turns = np.round(theta / (2 * np.pi))
+    new = np.abs(theta - 2 * np.pi * turns)
+    flip = np.where(theta - 2 * np.pi * turns < 0, -1.0, 1.0)
+    scale = np.where(theta > 0, flip * new / np.where(theta > 0, theta, 1.0), 1.0)
+    out[:, 3] *= scale
+    out[:, 4] *= scale
+    out[:, 5] = wrap_angle(out[:, 5])
+    return out
+
+
+class GoughStewart(Mechanism):
+    """Gough–Stewart 6-UPS platform with semi-regular hexagonal joint layouts.
+
+    Parameters
+    ----------
+    r_base, r_platform : float
+        Radii of the base and platform joint circles (mm), > 0.
+    sep_base, sep_platform : float
+        Angle between the two joints of a pair (deg), in (0, 120).
+    height : float
+        Nominal height (mm) > 0: the home pose is ``(0, 0, height, 0, 0, 0)``; with
+        ``cone_reference="home"`` the joints' axes are the home leg directions.
+    q_min, q_max : float
+        Leg stroke (mm), ``0 < q_min < q_max``.
+    cone_base, cone_platform : float
+        Largest passive-joint cone angle (deg), in (0, 180), at the base (U) and
+        platform (S) joints.
+    cone_reference : {"home", "normal"}
+        Axis each cone angle is measured from (module docstring).
+    homogenising : {"platform", "base", "mean"}
+        Characteristic length dividing the angular Jacobian columns: ``r_platform``
+        (default: the moment arm of the platform joints), ``r_base``, or their mean.
+    """
+
+    name = "gough_stewart"
+    dof = 6
+    pose_names = ("x", "y", "z", "tilt_x", "tilt_y", "torsion")
+    angular = (False, False, False, True, True, True)
+    length_unit = "mm"
+
+    default_fixed = {"r_base": 400.0, "q_min": 600.0, "q_max": 900.0, "cone_base": 45.0,
+                     "cone_platform": 45.0, "cone_reference": "home", "homogenising": "platform"}
+    #: 32^3 nodes: the constant-orientation default samples (x, y, z)
+    default_nodes = 32**3
+    min_resolution = 16
+
+    #: ``sep_base`` stops at 60 deg: (sep_base, sep_platform) and (120 - sep_base, 120 - sep_platform)
+    #: are the same joints relabelled and turned by 60 deg, so the upper half would repeat the lower
+    design_variables = (
+        DesignVariable("r_platform", 150.0, 400.0, "mm"),
+        DesignVariable("sep_base", 10.0, 60.0, "deg"),
+        DesignVariable("sep_platform", 10.0, 110.0, "deg"),
+        DesignVariable("height", 550.0, 850.0, "mm"),
+    )
+
+    def __init__(self, r_base: float, r_platform: float, sep_base: float, sep_platform: float,
+                 height: float, q_min: float = 600.0, q_max: float = 900.0, cone_base: float = 45.0,
+                 cone_platform: float = 45.0, cone_reference: str = "home",
+                 homogenising: str = "platform") -> None:
+        owner = "GoughStewart"
+        self.r_base = check_positive(owner, "r_base", r_base)
+        self.r_platform = check_positive(owner, "r_platform", r_platform)
+        self.height = check_positive(owner, "height", height)
+        self.q_min, self.q_max = check_range(owner, "q_min", q_min, "q_max", q_max)
+        for name, value in (("sep_base", sep_base), ("sep_platform", sep_platform)):
+            v = check_positive(owner, name, value)
+            if v >= 120.0:
+                raise ValueError(f"{owner}: parameter '{name}' must be in (0, 120) degrees; got {value!r}")
+        for name, value in (("cone_base", cone_base), ("cone_platform", cone_platform)):
+            v = check_positive(owner, name, value)
+            if v >= 180.0:
+                raise ValueError(f"{owner}: parameter '{name}' must be in (0, 180) degrees; got {value!r}")
+        for name, value, allowed in (("cone_reference", cone_reference, ("home", "normal")),
+                                     ("homogenising", homogenising, ("platform", "base", "mean"))):
+            if value not in allowed:
+                raise ValueError(f"{owner}: parameter '{name}' must be one of {', '.join(allowed)}; got {value!r}")
+        self.sep_base, self.sep_platform = float(sep_base), float(sep_platform)
+        self.cone_base, self.cone_platform = float(cone_base), float(cone_platform)
+        self.cone_reference, self.homogenising = cone_reference, homogenising
+        self._params = {"r_base": self.r_base, "r_platform": self.r_platform, "sep_base": self.sep_base,
+                        "sep_platform": self.sep_platform, "height": self.height, "q_min": self.q_min,
+                        "q_max": self.q_max, "cone_base": self.cone_base, "cone_platform": self.cone_platform,
+                        "cone_reference": cone_reference, "homogenising": homogenising}
+        ang_b = _joint_angles(self.sep_base, _BASE_CENTRES, _BASE_SIGNS)
+        ang_p = _joint_angles(self.sep_platform, _PLATFORM_CENTRES, _PLATFORM_SIGNS)
+        #: base joints b_i (6, 3), mm, base frame
+        self.base = self.r_base * np.column_stack([np.cos(ang_b), np.sin(ang_b), np.zeros(6)])
+        #: platform joints p_i (6, 3), mm, platform frame
+        self.platform = self.r_platform * np.column_stack([np.cos(ang_p), np.sin(ang_p), np.zeros(6)])
+        home = self.platform + np.array([0.0, 0.0, self.height]) - self.base
+        home_axes = home / np.linalg.norm(home, axis=1, keepdims=True)
+        normal = np.tile([0.0, 0.0, 1.0], (6, 1))
+        #: joint axes (6, 3): base ones in the base frame, platform ones in the platform frame
+        self.base_axes = home_axes if cone_reference == "home" else normal
+        self.platform_axes = home_axes if cone_reference == "home" else normal
+
+    # ---------------------------------------------------------- properties
+    @property
+    def home_pose(self) -> np.ndarray:
+        """``(0, 0, height, 0, 0, 0)`` (mm, rad), shape (6,)."""
+        return np.array([0.0, 0.0, self.height, 0.0, 0.0, 0.0])
+
+    @property
+    def characteristic_length(self) -> float:
+        """Length (mm) dividing the angular Jacobian columns (reading ``homogenising``).
+
+        Default ``r_platform``: ``|R p_i|``, the moment arm of every platform joint, so an
+        angular column divided by it is the leg speed per unit speed of the joints.
+        """
+        return {"platform": self.r_platform, "base": self.r_base,
+                "mean": 0.5 * (self.r_base + self.r_platform)}[self.homogenising]
+
+    @property
+    def actuator_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """``q_min <= q_i <= q_max`` (mm)."""
+        return np.full(6, self.q_min), np.full(6, self.q_max)
+
+    @property
+    def default_orientation(self) -> tuple[float, float]:
+        """(0, 0): the constant-orientation workspace at the home orientation (a 3-D volume, mm^3).
+
+        A full 6-D grid is too costly for a GA; pass an orientation range (rad) to
+        :func:`kinematics.workspace.evaluate` for a 6-D grid, or use :func:`workspace_6d`.
+        """
+        return (0.0, 0.0)
+
+    def pose_bounds(self, orientation: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+        """Box (mm, rad) containing the upper workspace at orientations in ``orientation``.
+
+        ``c = b_i + L_i - R p_i`` for every leg i. The leg ``L_i`` (length <= q_max) lies
+        in the cone of half-angle ``cone_base`` about the base axis ``a_i``, so along a
+        unit direction d, ``L_i . d <= q_max cos(max(angle(a_i, d) - cone_base, 0))``,
+        and ``|(R p_i) . d| <= r_platform`` (vertically ``<= r_platform sin(tilt)``);
+        hence ``c . d <= min_i (b_i . d + q_max cos(...) + arm)`` for d = +-x, +-y, +z,
+        and ``c_z >= max_i q_min cos(min(angle(a_i, k) + cone_base, pi/2)) - arm``.
+        The orientation box's largest tilt is ``sqrt(2) max(|lo|, |hi|)``.
+        """
+        lo, hi = float(orientation[0]), float(orientation[1])
+        tilt_max = min(math.sqrt(2.0) * max(abs(lo), abs(hi)), math.pi)
+        drop = self.r_platform * (math.sin(tilt_max) if tilt_max < math.pi / 2 else 1.0)
+        cone = math.radians(self.cone_base)
+        directions = np.array([[1.0, 0, 0], [-1.0, 0, 0], [0, 1.0, 0], [0, -1.0, 0], [0, 0, 1.0]])
+        angle = np.arccos(np.clip(self.base_axes @ directions.T, -1.0, 1.0))  # (6 legs, 5 directions)
+        reach = self.q_max * np.cos(np.clip(angle - cone, 0.0, None))
+        arm = np.array([self.r_platform] * 4 + [drop])
+        upper = np.min(self.base @ directions.T + reach + arm, axis=0)
+        from_vertical = np.minimum(angle[:, 4] + cone, math.pi / 2)
+        z_lo = max(float(np.max(self.q_min * np.cos(from_vertical))) - drop, 0.0)
+        return (np.array([-upper[1], -upper[3], z_lo, lo, lo, lo]),
+                np.array([upper[0], upper[2], max(upper[4], z_lo), hi, hi, hi]))
+
+    def reference_volume(self, orientation: tuple[float, float]) -> float:
+        """``V* = pi q_max^3`` times the orientation box's measure (mm^3, or mm^3 rad^3).
+
+        The cylinder of radius and height ``q_max`` about the base axis: every platform
+        centre at zero tilt lies at ``0 < z <= q_max``, and within ``q_max + r_platform -
+        r_base cos(g/2)`` of the axis (:meth:`pose_bounds`). A robot size set by the
+        stroke alone, so that at a fixed stroke SURI ranks designs by V; SURI stays
+        below 0.12 over the default design box (``docs/gough_stewart.md``).
+        """
+        return math.pi * self.q_max**3 * orientation_measure(orientation, 3)
+
+    def plot_slice(self, orientation: tuple[float, float]) -> tuple[dict[str, float], tuple[int, int], str]:
+        """The vertical (x, z) plane through the base centre (y = 0), angles at the middle of
+        ``orientation``."""
+        mid = 0.5 * (float(orientation[0]) + float(orientation[1]))
+        fixed = {"y": 0.0, "tilt_x": mid, "tilt_y": mid, "torsion": mid}
+        return fixed, (0, 2), f"y = 0 mm, tilt = torsion = {np.degrees(mid):.1f}°"
+
+    # ------------------------------------------------------------ geometry
+    def _legs(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Arms ``R p_i`` and legs ``c + R p_i - b_i``, each (N, 6, 3), mm, base frame."""
+        rot = rotation(poses)
+        arms = (rot @ self.platform.T).transpose(0, 2, 1)
+        legs = arms + poses[:, None, 0:3] - self.base
+        return arms, legs
+
+    def platform_points(self, poses: np.ndarray) -> np.ndarray:
+        """Platform joints ``P_i = c + R p_i`` (N, 6, 3), mm, base frame."""
+        poses = self._check_poses(poses)
+        arms, _ = self._legs(poses)
+        return arms + poses[:, None, 0:3]
+
+    def leg_vectors(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Leg lengths ``q_i`` (N, 6) (mm) and unit vectors ``u_i`` (N, 6, 3), base frame."""
+        poses = self._check_poses(poses)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            _, legs = self._legs(poses)
+            q = np.linalg.norm(legs, axis=-1)
+            return q, legs / q[..., None]
+
+    def cone_angles(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Passive-joint cone angles (rad), base and platform, each (N, 6).
+
+        Angle between ``u_i`` and the base joint's axis, and between ``u_i`` and the
+        platform joint's axis carried by R (``cone_reference``).
+        """
+        poses = self._check_poses(poses)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            _, unit = self.leg_vectors(poses)
+            rot = rotation(poses)
+            moved = np.einsum("nij,kj->nki", rot, self.platform_axes)
+            base = np.arccos(np.clip(np.einsum("nki,ki->nk", unit, self.base_axes), -1.0, 1.0))
+            plat = np.arccos(np.clip(np.einsum("nki,nki->nk", unit, moved), -1.0, 1.0))
+        return base, plat
+
+    def within_joint_limits(self, poses: np.ndarray) -> np.ndarray:
+        """Every base cone angle ``<= cone_base`` and platform cone angle ``<= cone_platform`` (N,) bool."""
+        base, plat = self.cone_angles(poses)
+        return (np.all(base <= math.radians(self.cone_base), axis=1)
+                & np.all(plat <= math.radians(self.cone_platform), axis=1))
+
+    def twist_jacobian(self, poses: np.ndarray) -> np.ndarray:
+        """Inverse kinematic Jacobian in twist form (N, 6, 6): rows ``[u_i^T, (R p_i x u_i)^T]``.
+
+        ``q_dot = J_twist (c_dot, omega)`` with omega the platform's angular velocity
+        (rad/s) in the base frame (Merlet 2006, Sec. 5.2). Units mm/mm and mm/rad.
+        """
+        poses = self._check_poses(poses)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            return self._twist_jacobian(poses)
+
+    def _twist_jacobian(self, poses: np.ndarray) -> np.ndarray:
+        arms, legs = self._legs(poses)
+        unit = legs / np.linalg.norm(legs, axis=-1, keepdims=True)
+        return np.concatenate([unit, np.cross(arms, unit)], axis=-1)
+
+    # ------------------------------------------------------------- kernels
+    def _inverse(self, poses: np.ndarray) -> np.ndarray:
+        """Leg lengths ``q_i = |c + R p_i - b_i|`` (N, 6), mm (Merlet 2006, eq. 4.1)."""
+        _, legs = self._legs(poses)
+        return np.linalg.norm(legs, axis=-1)
+
+    def _lengths_and_jacobian(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``q`` (N, 6) and ``J`` (N, 6, 6) of :meth:`_inverse` and :meth:`_jacobian`, sharing the legs."""
+        arms, legs = self._legs(poses)
+        q = np.linalg.norm(legs, axis=-1)
+        unit = legs / q[..., None]
+        jac = np.concatenate([unit, np.cross(arms, unit) @ angular_velocity_map(poses)], axis=-1)
+        return q, jac
+
+    def _constraints_jacobian(self, poses: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """``d(|L_i|^2 - q_i^2) / d pose = 2 q_i J_i`` (N, 6, 6), mm^2 per pose unit."""
+        lengths, jac = self._lengths_and_jacobian(poses)
+        return 2.0 * lengths[..., None] * jac
+
+    def _jacobian(self, poses: np.ndarray) -> np.ndarray:
+        """``J = J_twist diag(I, M)`` (N, 6, 6): ``d q / d (x, y, z, tilt_x, tilt_y, torsion)``.
+
+        ``M`` maps the rates of the orientation coordinates to omega
+        (:func:`angular_velocity_map`); at zero tilt ``M = I``.
+        """
+        twist = self._twist_jacobian(poses)
+        out = twist.copy()
+        out[:, :, 3:] = twist[:, :, 3:] @ angular_velocity_map(poses)
+        return out
+
+    # --------------------------------------------------- forward kinematics
+    def forward_from(self, q: np.ndarray, guess: np.ndarray, iterations: int = 60) -> np.ndarray:
+        """One forward-kinematics solution by Newton's method from ``guess``.
+
+        Parameters
+        ----------
+        q : array_like, shape (6,)
+            Leg lengths (mm).
+        guess : array_like, shape (6,)
+            Starting pose (mm, rad), e.g. the last known pose of a trajectory.
+
+        Returns
+        -------
+        ndarray, shape (6,)
+            The pose Newton converges to (tilt in [0, pi], torsion in (-pi, pi]), or a row
+            of NaN when it does not converge to a solution (residual > 1e-9 q^2).
+        """
+        q = self._check_actuators(q)
+        guess = self._check_poses(guess)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            sols, res = newton_polish(lambda p: self._constraints(p, q),
+                                      lambda p: self._constraints_jacobian(p, q), guess, iterations)
+        if not np.all(np.abs(res[0]) <= 1e-9 * q**2):
+            return np.full(6, np.nan)
+        return canonical_orientation(sols)[0]
+
+    def assembly_starts(self, n: int = 256, seed: int = 0) -> np.ndarray:
+        """Deterministic starting poses (n + 1, 6) for the multi-start forward kinematics.
+
+        The home pose, then a scrambled Sobol sequence (``seed``) over the box of
+        :meth:`pose_bounds` at tilts and torsions in [-pi/2, pi/2] with z over
+        ``[-z_hi, z_hi]`` (upper and mirrored lower assembly modes).
+        """
+        lo, hi = self.pose_bounds((-np.pi / 2, np.pi / 2))
+        lo = lo.copy()
+        lo[2] = -hi[2]
+        sobol = qmc.Sobol(6, scramble=True, seed=seed).random(n)
+        return np.vstack([self.home_pose, lo + (hi - lo) * sobol])
+
+    def assembly_modes(self, q: np.ndarray, n_starts: int = 256, seed: int = 0) -> np.ndarray:
+        """Several assembly modes (k, 6) of leg lengths ``q``: Newton from :meth:`assembly_starts`.
+
+        Every returned pose solves the closure equations to 1e-9 q^2 (squared lengths,
+        mm^2); the set is what the starts reach (up to 40 modes exist for a general 6-6
+        platform, Dietmaier 1998), sorted by :func:`~kinematics.base.sort_poses`.
+        More starts (``n_starts``) or other ``seed`` values find more.
+        """
+        q = self._check_actuators(q)
+        return sort_poses(self._multistart(q, int(n_starts), seed))
+
+    def _multistart(self, q: np.ndarray, n_starts: int, seed: int) -> np.ndarray:
+        starts = self.assembly_starts(n_starts, seed)
+        residual = lambda p: self._constraints(p, q)  # noqa: E731
+        jacobian = lambda p: self._constraints_jacobian(p, q)  # noqa: E731
+        # a few Newton steps on every start, then polish the ones heading to a solution
+        # (within 5 % of q^2): the others would use up the iterations wandering
+        sols, res = newton_polish(residual, jacobian, starts, 12)
+        near = np.all(np.abs(res) <= 0.05 * q**2, axis=1)
+        sols, res = newton_polish(residual, jacobian, sols[near], 40)
+        ok = np.all(np.abs(res) <= 1e-9 * q**2, axis=1) & np.isfinite(sols).all(axis=1)
+        return unique_rows(canonical_orientation(sols[ok]))
+
+    def _forward(self, q: np.ndarray) -> np.ndarray:
+        """Multi-start Newton (:meth:`assembly_modes`); :meth:`forward` checks and sorts the poses."""
+        return self._multistart(q, 256, 0)
+
+
+# ------------------------------------------------------------ workspaces
+def constant_orientation_workspace(mech: GoughStewart, tilt_x: float = 0.0, tilt_y: float = 0.0,
+                                   torsion: float = 0.0, **options):
+    """Constant-orientation workspace: the mm^3 volume over (x, y, z) at one orientation (rad).
+
+    ``options`` go to :func:`kinematics.workspace.evaluate` (resolution,
+    min_inverse_condition, length, return_samples, error_estimate). SURI is
+    against ``pi r_base^2 (q_max - q_min)`` (:meth:`GoughStewart.reference_volume` at (0, 0)).
+    """
+    from kinematics.workspace import evaluate
+
+    angles = (float(tilt_x), float(tilt_y), float(torsion))
+    fixed = dict(zip(("tilt_x", "tilt_y", "torsion"), angles))
+    ev = evaluate(mech, orientation=(min(angles), max(angles)), fixed=fixed, **options)
+    reference = mech.reference_volume((0.0, 0.0))
+    return replace(ev, reference_volume=reference, suri=ev.volume / reference)
+
+
+def orientation_workspace(mech: GoughStewart, position: tuple[float, float, float],
+                          orientation: tuple[float, float] = (-np.pi / 2, np.pi / 2), **options):
+    """Orientation workspace at a fixed platform centre ``position`` (mm): the rad^3 volume over
+    (tilt_x, tilt_y, torsion) within the box ``orientation`` (rad) on every angle.
+
+    SURI is the fraction of the orientation box (the reference is its measure).
+    """
+    from kinematics.workspace import evaluate
+
+    fixed = dict(zip(("x", "y", "z"), (float(v) for v in position)))
+    ev = evaluate(mech, orientation=orientation, fixed=fixed, **options)
+    reference = orientation_measure(ev.orientation, 3)
+    return replace(ev, reference_volume=reference, suri=ev.volume / reference)
+
+
+@dataclass(frozen=True)
+class QuasiMonteCarloVolume:
+    """A 6-D workspace volume by randomised quasi-Monte-Carlo (:func:`workspace_6d`).
+
+    ``volume`` (mm^3 rad^3 over (x, y, z, tilt_x, tilt_y, torsion)) is the mean over
+    ``replicates`` independent scramblings; ``volume_ci`` its two-sided
+    ``confidence`` interval (Student t over the replicates). ``gdi`` likewise
+    (the mean of 1/kappa over the workspace). ``box_lower``/``box_upper`` is the reference box
+    sampled, ``box_volume`` its measure.
+    """
+
+    volume: float
+    volume_ci: tuple[float, float]
+    gdi: float
+    gdi_ci: tuple[float, float]
+    fraction: float
+    box_lower: tuple[float, ...]
+    box_upper: tuple[float, ...]
+    box_volume: float
+    n_points: int
+    replicates: int
+    confidence: float
+    unit: str = "mm³·rad³"
+
+
+def workspace_6d(mech: GoughStewart, orientation: tuple[float, float] = (-np.radians(15), np.radians(15)),
+                 n_points: int = 2**14, replicates: int = 8, seed: int = 0, confidence: float = 0.95,
+                 min_inverse_condition: float = 0.01, length: float | None = None) -> QuasiMonteCarloVolume:
+    """6-D workspace volume and GDI by randomised quasi-Monte-Carlo.
+
+    Samples ``replicates`` independently scrambled Sobol sets of ``n_points``
+    (a power of 2) each in the reference box ``pose_bounds(orientation)`` (x, y,
+    z in mm; tilt_x, tilt_y, torsion in ``orientation``, rad) and applies the
+    workspace's membership test (:func:`kinematics.workspace.membership`: leg
+    range, cone limits, orientation box, ``1/kappa > min_inverse_condition``).
+    Volume = box measure x inside fraction (mm^3 rad^3, in the tilt-vector /
+    torsion coordinates: not the Haar measure of SO(3)); the confidence
+    interval is the Student t interval over the replicates' estimates, which
+    are independent and unbiased (Owen's scrambling).
+    """
+    from kinematics.workspace import membership
+
+    if n_points < 2 or n_points & (n_points - 1):
+        raise ValueError(f"workspace_6d: n_points must be a power of 2 >= 2; got {n_points!r}")
+    if replicates < 2:
+        raise ValueError(f"workspace_6d: replicates must be >= 2; got {replicates!r}")
+    if not 0.0 < confidence < 1.0:
+        raise ValueError(f"workspace_6d: confidence must be in (0, 1); got {confidence!r}")
+    orientation = (float(orientation[0]), float(orientation[1]))
+    if not orientation[0] < orientation[1]:
+        raise ValueError(f"workspace_6d: orientation must be (lo, hi) with lo < hi (rad); got {orientation!r}")
+    lo, hi = mech.pose_bounds(orientation)
+    box = float(np.prod(hi - lo))
+    seeds = np.random.SeedSequence(seed).spawn(replicates)
+    volumes, gdis = [], []
+    for s in seeds:
+        u = qmc.Sobol(6, scramble=True, seed=np.random.default_rng(s)).random(n_points)
+        poses = lo + (hi - lo) * u
+        inside, ic = membership(mech, poses, orientation, float(min_inverse_condition), length)
+        volumes.append(box * inside.mean())
+        gdis.append(float(ic[inside].mean()) if inside.any() else 0.0)
+    volumes, gdis = np.array(volumes), np.array(gdis)
+    tq = float(student_t.ppf(0.5 + 0.5 * confidence, replicates - 1))
+
+    def interval(values: np.ndarray) -> tuple[float, float]:
+        half = tq * values.std(ddof=1) / math.sqrt(len(values))
+        return float(values.mean() - half), float(values.mean() + half)
+
+    return QuasiMonteCarloVolume(volume=float(volumes.mean()), volume_ci=interval(volumes),
+                                 gdi=float(gdis.mean()), gdi_ci=interval(gdis),
+                                 fraction=float(volumes.mean() / box), box_lower=tuple(map(float, lo)),
+                                 box_upper=tuple(map(float, hi)), box_volume=box, n_points=int(n_points),
+                                 replicates=int(replicates), confidence=float(confidence))
