@@ -50,6 +50,8 @@ DESIGNS = {
                  rho_min=80.0, rho_max=160.0),
     "rpr2": dict(b=5.0, q_min=6.0, q_max=9.6),
     "delta": dict(R=200.0, r=50.0, la=200.0, lb=400.0),
+    # constant-orientation workspace at the home orientation (its default evaluation)
+    "gough_stewart": dict(r_base=400.0, r_platform=250.0, sep_base=30.0, sep_platform=30.0, height=700.0),
 }
 SWEEP_STUDY = ["+experiment=h4_design", "sample.n=16", "optimizer.max_evaluations=120"]
 

@@ -43,9 +43,10 @@ leg ``2k + 1`` joins ``120k + sep_base/2`` to ``120k + 60 - sep_platform/2``
   ``d q / d pose`` in the pose coordinates above (the base's convention;
   at zero tilt the two are equal).
 * Forward kinematics: Newton from a guess (:meth:`GoughStewart.forward_from`);
-  :meth:`~kinematics.base.Mechanism.forward` runs Newton from a deterministic
-  set of starts (:meth:`GoughStewart.assembly_modes`) to collect several
-  assembly modes. A general 6-6 platform has up to 40 (Dietmaier 1998):
+  :meth:`GoughStewart.assembly_modes` runs Newton from a deterministic set of
+  starts (home pose, its mirror, a scrambled Sobol set over the pose box) to
+  collect several assembly modes; :meth:`~kinematics.base.Mechanism.forward`
+  does the same from 66 starts. A general 6-6 platform has up to 40 (Dietmaier 1998):
   multi-start Newton finds the ones whose basins the starts meet, not a
   certified complete set.
 * Limits: leg lengths ``q_min..q_max``; passive-joint cone angles (angle between
@@ -77,7 +78,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.stats import qmc, t as student_t
 
-from kinematics.algebra import newton_polish, unique_rows, wrap_angle
+from kinematics import kernels
+from kinematics.algebra import unique_rows, wrap_angle
 from kinematics.base import (
     DesignVariable,
     Mechanism,
@@ -253,6 +255,7 @@ class GoughStewart(Mechanism):
         home = self.platform + np.array([0.0, 0.0, self.height]) - self.base
         home_axes = home / np.linalg.norm(home, axis=1, keepdims=True)
         normal = np.tile([0.0, 0.0, 1.0], (6, 1))
+        self._starts: dict[tuple[int, object], np.ndarray] = {}
         #: joint axes (6, 3): base ones in the base frame, platform ones in the platform frame
         self.base_axes = home_axes if cone_reference == "home" else normal
         self.platform_axes = home_axes if cone_reference == "home" else normal
@@ -419,7 +422,52 @@ class GoughStewart(Mechanism):
         return out
 
     # --------------------------------------------------- forward kinematics
-    def forward_from(self, q: np.ndarray, guess: np.ndarray, iterations: int = 60) -> np.ndarray:
+    def _newton(self, q: np.ndarray, starts: np.ndarray, iterations: int = 30) -> np.ndarray:
+        """Newton's method on ``q_i(pose) - q_i = 0`` (mm) from each start (K, 6); converged poses.
+
+        Steps solve ``J step = residual`` with the analytic ``J`` (:meth:`_jacobian`).
+        A start is dropped when its step or Jacobian is not finite, or when its
+        position leaves a ball of ``10 (q_max + r_base)`` (diverged). Returned: the
+        poses (k, 6) whose residual is below ``1e-10 (1 + q_i)`` mm, in canonical
+        orientation (:func:`canonical_orientation`), in start order. Compiled
+        (:func:`_newton_kernel`, one start at a time) unless the numpy reference is selected
+        (:func:`kinematics.kernels.reference_kernels`); both take the same steps.
+        """
+        if kernels.compiled():
+            x = _newton_kernel(np.ascontiguousarray(starts, dtype=float), np.ascontiguousarray(q, dtype=float),
+                               np.ascontiguousarray(self.base), np.ascontiguousarray(self.platform),
+                               int(iterations), 10.0 * (self.q_max + self.r_base))
+            with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+                x = canonical_orientation(x)
+                lengths = self._inverse(x)
+            ok = np.isfinite(lengths).all(axis=1) & np.all(np.abs(lengths - q) <= 1e-10 * (1.0 + q), axis=1)
+            return x[ok]
+        x = np.array(starts, dtype=float, copy=True)
+        active = np.isfinite(x).all(axis=1)
+        converged = np.zeros(x.shape[0], dtype=bool)
+        far = 10.0 * (self.q_max + self.r_base)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            for _ in range(iterations):
+                idx = np.nonzero(active)[0]
+                if idx.size == 0:
+                    break
+                lengths, jac = self._lengths_and_jacobian(x[idx])
+                residual = lengths - q
+                good = np.isfinite(jac).all(axis=(1, 2)) & np.isfinite(residual).all(axis=1)
+                good[good] = np.abs(np.linalg.det(jac[good])) > 1e-300
+                step = np.zeros((idx.size, 6))
+                step[good] = np.linalg.solve(jac[good], residual[good][..., None])[..., 0]
+                x[idx] -= step
+                small = np.max(np.abs(step) / (1.0 + np.abs(x[idx])), axis=1) < 1e-13
+                lost = ~good | ~np.isfinite(x[idx]).all(axis=1) | (np.linalg.norm(x[idx, :3], axis=1) > far)
+                active[idx[lost | small]] = False
+                converged[idx[small & ~lost]] = True
+            x = canonical_orientation(x)
+            lengths = self._inverse(x)
+        ok = np.isfinite(lengths).all(axis=1) & np.all(np.abs(lengths - q) <= 1e-10 * (1.0 + q), axis=1)
+        return x[ok]
+
+    def forward_from(self, q: np.ndarray, guess: np.ndarray, iterations: int = 30) -> np.ndarray:
         """One forward-kinematics solution by Newton's method from ``guess``.
 
         Parameters
@@ -428,61 +476,62 @@ class GoughStewart(Mechanism):
             Leg lengths (mm).
         guess : array_like, shape (6,)
             Starting pose (mm, rad), e.g. the last known pose of a trajectory.
+        iterations : int
+            Largest number of Newton steps.
 
         Returns
         -------
         ndarray, shape (6,)
-            The pose Newton converges to (tilt in [0, pi], torsion in (-pi, pi]), or a row
-            of NaN when it does not converge to a solution (residual > 1e-9 q^2).
+            The pose Newton converges to (tilt in [0, pi], torsion in (-pi, pi]), or a
+            row of NaN when it does not converge (leg residual > 1e-10 (1 + q) mm).
         """
         q = self._check_actuators(q)
-        guess = self._check_poses(guess)
-        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            sols, res = newton_polish(lambda p: self._constraints(p, q),
-                                      lambda p: self._constraints_jacobian(p, q), guess, iterations)
-        if not np.all(np.abs(res[0]) <= 1e-9 * q**2):
-            return np.full(6, np.nan)
-        return canonical_orientation(sols)[0]
+        sols = self._newton(q, self._check_poses(guess), iterations)
+        return sols[0] if len(sols) else np.full(6, np.nan)
 
-    def assembly_starts(self, n: int = 256, seed: int = 0) -> np.ndarray:
-        """Deterministic starting poses (n + 1, 6) for the multi-start forward kinematics.
+    #: Sobol starts of :meth:`forward` (besides the home pose and its mirror)
+    forward_starts: int = 64
 
-        The home pose, then a scrambled Sobol sequence (``seed``) over the box of
-        :meth:`pose_bounds` at tilts and torsions in [-pi/2, pi/2] with z over
+    def assembly_starts(self, n: int = 1024, seed: int = 0) -> np.ndarray:
+        """Deterministic starting poses (n + 2, 6) for the multi-start forward kinematics (mm, rad).
+
+        The home pose, its mirror through the base plane, then ``n`` (a power of 2)
+        points of a scrambled Sobol sequence (``seed``) over the box of
+        :meth:`pose_bounds` at tilts and torsions in [-pi/2, pi/2], with z over
         ``[-z_hi, z_hi]`` (upper and mirrored lower assembly modes).
         """
+        if n < 1 or n & (n - 1):
+            raise ValueError(f"GoughStewart: n_starts must be a power of 2 >= 1; got {n!r}")
+        key = (int(n), seed)
+        if key not in self._starts:  # a pure function of the design: computed once per design
+            self._starts[key] = self._make_starts(int(n), seed)
+            self._starts[key].flags.writeable = False
+        return self._starts[key]
+
+    def _make_starts(self, n: int, seed: int) -> np.ndarray:
         lo, hi = self.pose_bounds((-np.pi / 2, np.pi / 2))
         lo = lo.copy()
         lo[2] = -hi[2]
         sobol = qmc.Sobol(6, scramble=True, seed=seed).random(n)
-        return np.vstack([self.home_pose, lo + (hi - lo) * sobol])
+        mirror = self.home_pose * np.array([1, 1, -1, 1, 1, 1])
+        return np.vstack([self.home_pose, mirror, lo + (hi - lo) * sobol])
 
-    def assembly_modes(self, q: np.ndarray, n_starts: int = 256, seed: int = 0) -> np.ndarray:
-        """Several assembly modes (k, 6) of leg lengths ``q``: Newton from :meth:`assembly_starts`.
+    def assembly_modes(self, q: np.ndarray, n_starts: int = 1024, seed: int = 0) -> np.ndarray:
+        """Several assembly modes (k, 6) of leg lengths ``q`` (mm): Newton from :meth:`assembly_starts`.
 
-        Every returned pose solves the closure equations to 1e-9 q^2 (squared lengths,
-        mm^2); the set is what the starts reach (up to 40 modes exist for a general 6-6
-        platform, Dietmaier 1998), sorted by :func:`~kinematics.base.sort_poses`.
-        More starts (``n_starts``) or other ``seed`` values find more.
+        Every returned pose reproduces ``q`` to ``1e-10 (1 + q)`` mm. The set is what
+        the starts reach, not a certified complete one (a general 6-6 platform has up
+        to 40 modes, Dietmaier 1998): more starts (``n_starts``) or other ``seed``
+        values find more. Sorted by :func:`~kinematics.base.sort_poses`.
         """
         q = self._check_actuators(q)
-        return sort_poses(self._multistart(q, int(n_starts), seed))
-
-    def _multistart(self, q: np.ndarray, n_starts: int, seed: int) -> np.ndarray:
-        starts = self.assembly_starts(n_starts, seed)
-        residual = lambda p: self._constraints(p, q)  # noqa: E731
-        jacobian = lambda p: self._constraints_jacobian(p, q)  # noqa: E731
-        # a few Newton steps on every start, then polish the ones heading to a solution
-        # (within 5 % of q^2): the others would use up the iterations wandering
-        sols, res = newton_polish(residual, jacobian, starts, 12)
-        near = np.all(np.abs(res) <= 0.05 * q**2, axis=1)
-        sols, res = newton_polish(residual, jacobian, sols[near], 40)
-        ok = np.all(np.abs(res) <= 1e-9 * q**2, axis=1) & np.isfinite(sols).all(axis=1)
-        return unique_rows(canonical_orientation(sols[ok]))
+        if not np.all(np.isfinite(q)):
+            return np.empty((0, 6))
+        return sort_poses(unique_rows(self._newton(q, self.assembly_starts(int(n_starts), seed))))
 
     def _forward(self, q: np.ndarray) -> np.ndarray:
-        """Multi-start Newton (:meth:`assembly_modes`); :meth:`forward` checks and sorts the poses."""
-        return self._multistart(q, 256, 0)
+        """:meth:`assembly_modes` from :attr:`forward_starts` starts; :meth:`forward` checks and sorts."""
+        return unique_rows(self._newton(q, self.assembly_starts(self.forward_starts, 0)))
 
 
 # ------------------------------------------------------------ workspaces
@@ -591,3 +640,99 @@ def workspace_6d(mech: GoughStewart, orientation: tuple[float, float] = (-np.rad
                                  fraction=float(volumes.mean() / box), box_lower=tuple(map(float, lo)),
                                  box_upper=tuple(map(float, hi)), box_volume=box, n_points=int(n_points),
                                  replicates=int(replicates), confidence=float(confidence))
+
+
+@kernels.jit
+def _newton_kernel(starts, q, base, platform, iterations, far):
+    """Compiled :meth:`GoughStewart._newton`: per start (K, 6), Newton on ``|c + R p_i - b_i| - q_i``
+    (mm) with ``R = Exp([w]x) R_z(torsion)`` (:func:`rotation`) and the rows
+    ``[u_i, ((R p_i) x u_i) M]`` of :meth:`GoughStewart._jacobian`, steps by Gaussian elimination
+    with partial pivoting. Stops a start at a relative step below 1e-13, a zero pivot, a
+    non-finite value or a position beyond ``far`` (mm). Returns the last iterates (K, 6); the
+    caller keeps those whose leg residual is small."""
+    count = starts.shape[0]
+    out = starts.copy()
+    rot = np.empty((3, 3))
+    tilt = np.empty((3, 3))
+    left = np.empty((3, 3))
+    hat = np.empty((3, 3))
+    hat2 = np.empty((3, 3))
+    jac = np.empty((6, 7))
+    for k in range(count):
+        x = out[k]
+        for _ in range(iterations):
+            a, b, torsion = x[3], x[4], x[5]
+            theta2 = a * a + b * b
+            theta = math.sqrt(theta2)
+            if theta < 1e-3:
+                sa = 1.0 - theta2 / 6.0 + theta2 * theta2 / 120.0
+                sb = 0.5 - theta2 / 24.0 + theta2 * theta2 / 720.0
+                sc = 1.0 / 6.0 - theta2 / 120.0 + theta2 * theta2 / 5040.0
+            else:
+                sa = math.sin(theta) / theta
+                sb = (1.0 - math.cos(theta)) / theta2
+                sc = (theta - math.sin(theta)) / (theta2 * theta)
+            hat[0, 0], hat[0, 1], hat[0, 2] = 0.0, 0.0, b
+            hat[1, 0], hat[1, 1], hat[1, 2] = 0.0, 0.0, -a
+            hat[2, 0], hat[2, 1], hat[2, 2] = -b, a, 0.0
+            hat2[0, 0], hat2[0, 1], hat2[0, 2] = -b * b, a * b, 0.0
+            hat2[1, 0], hat2[1, 1], hat2[1, 2] = a * b, -a * a, 0.0
+            hat2[2, 0], hat2[2, 1], hat2[2, 2] = 0.0, 0.0, -theta2
+            for r in range(3):
+                for c in range(3):
+                    eye = 1.0 if r == c else 0.0
+                    tilt[r, c] = eye + sa * hat[r, c] + sb * hat2[r, c]
+                    left[r, c] = eye + sb * hat[r, c] + sc * hat2[r, c]
+            ct, st = math.cos(torsion), math.sin(torsion)
+            for r in range(3):
+                rot[r, 0] = tilt[r, 0] * ct + tilt[r, 1] * st
+                rot[r, 1] = -tilt[r, 0] * st + tilt[r, 1] * ct
+                rot[r, 2] = tilt[r, 2]
+            for i in range(6):
+                ax = rot[0, 0] * platform[i, 0] + rot[0, 1] * platform[i, 1] + rot[0, 2] * platform[i, 2]
+                ay = rot[1, 0] * platform[i, 0] + rot[1, 1] * platform[i, 1] + rot[1, 2] * platform[i, 2]
+                az = rot[2, 0] * platform[i, 0] + rot[2, 1] * platform[i, 1] + rot[2, 2] * platform[i, 2]
+                lx, ly, lz = x[0] + ax - base[i, 0], x[1] + ay - base[i, 1], x[2] + az - base[i, 2]
+                length = math.sqrt(lx * lx + ly * ly + lz * lz)
+                ux, uy, uz = lx / length, ly / length, lz / length
+                mx, my, mz = ay * uz - az * uy, az * ux - ax * uz, ax * uy - ay * ux
+                jac[i, 0], jac[i, 1], jac[i, 2] = ux, uy, uz
+                jac[i, 3] = mx * left[0, 0] + my * left[1, 0] + mz * left[2, 0]
+                jac[i, 4] = mx * left[0, 1] + my * left[1, 1] + mz * left[2, 1]
+                jac[i, 5] = mx * tilt[0, 2] + my * tilt[1, 2] + mz * tilt[2, 2]
+                jac[i, 6] = length - q[i]
+            # Gaussian elimination with partial pivoting on the augmented [J | residual]
+            singular = False
+            for col in range(6):
+                pivot = col
+                for r in range(col + 1, 6):
+                    if abs(jac[r, col]) > abs(jac[pivot, col]):
+                        pivot = r
+                if not (abs(jac[pivot, col]) > 0.0):
+                    singular = True
+                    break
+                if pivot != col:
+                    for c in range(7):
+                        jac[col, c], jac[pivot, c] = jac[pivot, c], jac[col, c]
+                for r in range(col + 1, 6):
+                    f = jac[r, col] / jac[col, col]
+                    for c in range(col, 7):
+                        jac[r, c] -= f * jac[col, c]
+            if singular:
+                break
+            small = True
+            finite = True
+            for r in range(5, -1, -1):
+                acc = jac[r, 6]
+                for c in range(r + 1, 6):
+                    acc -= jac[r, c] * jac[c, 6]
+                jac[r, 6] = acc / jac[r, r]
+            for j in range(6):
+                x[j] -= jac[j, 6]
+                if not math.isfinite(x[j]):
+                    finite = False
+                if abs(jac[j, 6]) >= 1e-13 * (1.0 + abs(x[j])):
+                    small = False
+            if not finite or math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]) > far or small:
+                break
+    return out

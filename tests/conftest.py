@@ -15,6 +15,8 @@ PAPER_DESIGNS = {
                  rho_min=80.0, rho_max=160.0),  # seed 003 Sec. 5.2-5.4
     "rpr2": dict(b=5.0, q_min=6.0, q_max=9.6),  # seed 004
     "delta": dict(R=200.0, r=50.0, la=200.0, lb=400.0),  # kinematics/delta.py
+    "gough_stewart": dict(r_base=400.0, r_platform=250.0, sep_base=30.0, sep_platform=30.0,
+                          height=700.0),  # kinematics/gough_stewart.py, docs/gough_stewart.md
 }
 
 #: a box of poses (lower, upper) per mechanism where most poses are reachable
@@ -24,6 +26,7 @@ POSE_BOXES = {
     "rpr3": ([20.0, 20.0, -np.pi], [180.0, 180.0, np.pi]),
     "rpr2": ([-6.0, -9.0], [11.0, 9.0]),
     "delta": ([-150.0, -150.0, -480.0], [150.0, 150.0, -250.0]),
+    "gough_stewart": ([-150.0, -150.0, 600.0, -0.4, -0.4, -0.4], [150.0, 150.0, 850.0, 0.4, 0.4, 0.4]),
 }
 
 
