@@ -290,3 +290,15 @@ def test_default_evaluation_is_the_constant_orientation_workspace(mech):
     assert ev.resolution == 32 and ev.n_samples == 32**3 and ev.volume_unit == "mm³"
     co = constant_orientation_workspace(mech, resolution=32, error_estimate=False)
     assert co.volume == pytest.approx(ev.volume, rel=1e-12) and co.gdi == pytest.approx(ev.gdi, rel=1e-12)
+
+
+def test_compiled_newton_takes_the_numpy_steps(mech):
+    from kinematics import kernels
+
+    for pose in poses(3, seed=21):
+        q = mech.inverse(pose)[0]
+        fast = mech.assembly_modes(q, n_starts=128)
+        with kernels.reference_kernels():
+            reference = mech.assembly_modes(q, n_starts=128)
+        assert fast.shape == reference.shape and len(fast) >= 2
+        np.testing.assert_allclose(fast, reference, rtol=1e-9, atol=1e-9)
