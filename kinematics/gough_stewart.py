@@ -121,9 +121,21 @@ def _tilt_terms(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return a, b, c
 
 
+def _one_orientation(poses: np.ndarray) -> bool:
+    """True when every row of ``poses`` (N > 1, 6) has the same (finite) angles: a grid at one
+    orientation, whose rotation is computed once (the constant-orientation workspace)."""
+    angles = poses[:, 3:6]
+    return poses.shape[0] > 1 and bool(np.all(angles == angles[0]))
+
+
 def rotation(poses: np.ndarray) -> np.ndarray:
-    """``R = Exp([w]x) R_z(torsion)`` (N, 3, 3) of poses (N, 6) (module docstring; rad)."""
+    """``R = Exp([w]x) R_z(torsion)`` (N, 3, 3) of poses (N, 6) (module docstring; rad).
+
+    When every row has the same angles the result is one matrix broadcast (read-only).
+    """
     poses = np.asarray(poses, dtype=float)
+    if _one_orientation(poses):
+        return np.broadcast_to(rotation(poses[:1]), (poses.shape[0], 3, 3))
     w = np.zeros((poses.shape[0], 3))
     w[:, 0], w[:, 1] = poses[:, 3], poses[:, 4]
     theta = np.hypot(w[:, 0], w[:, 1])
@@ -142,8 +154,11 @@ def angular_velocity_map(poses: np.ndarray) -> np.ndarray:
 
     Columns: the left Jacobian of SO(3) ``J_l(w) = I + (1 - cos t)/t^2 [w]x + (t - sin t)/t^3 [w]x^2``
     applied to x and y (the tilt vector's rate), and the platform normal ``Exp(w) k`` (torsion).
+    One matrix broadcast (read-only) when every row has the same angles.
     """
     poses = np.asarray(poses, dtype=float)
+    if _one_orientation(poses):
+        return np.broadcast_to(angular_velocity_map(poses[:1]), (poses.shape[0], 3, 3))
     w = np.zeros((poses.shape[0], 3))
     w[:, 0], w[:, 1] = poses[:, 3], poses[:, 4]
     theta = np.hypot(w[:, 0], w[:, 1])
@@ -336,8 +351,10 @@ class GoughStewart(Mechanism):
     # ------------------------------------------------------------ geometry
     def _legs(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Arms ``R p_i`` and legs ``c + R p_i - b_i``, each (N, 6, 3), mm, base frame."""
-        rot = rotation(poses)
-        arms = (rot @ self.platform.T).transpose(0, 2, 1)
+        if _one_orientation(poses):  # one orientation: the arms R p_i once
+            arms = np.broadcast_to(self._legs(poses[:1])[0], (poses.shape[0], 6, 3))
+        else:
+            arms = (rotation(poses) @ self.platform.T).transpose(0, 2, 1)
         legs = arms + poses[:, None, 0:3] - self.base
         return arms, legs
 

@@ -160,6 +160,21 @@ def test_batch_equals_one_at_a_time(mech):
         assert mech.within_joint_limits(pose[None])[0] == inside[k]
 
 
+def test_one_orientation_batch_equals_one_at_a_time(mech):
+    """A grid at one orientation computes its rotation once: the same floats as pose by pose."""
+    p = poses(30, seed=3)
+    p[:, 3:] = [0.1, -0.2, 0.3]
+    q, jac, ic = mech.inverse(p), mech.jacobian(p), mech.inverse_condition(p)
+    base, plat = mech.cone_angles(p)
+    for k, pose in enumerate(p):
+        np.testing.assert_array_equal(mech.inverse(pose[None])[0], q[k])
+        np.testing.assert_array_equal(mech.jacobian(pose[None])[0], jac[k])
+        np.testing.assert_array_equal(mech.inverse_condition(pose[None])[0], ic[k])
+        one = mech.cone_angles(pose[None])
+        np.testing.assert_array_equal(one[0][0], base[k])
+        np.testing.assert_array_equal(one[1][0], plat[k])
+
+
 def test_unreachable_and_nan_without_warning(mech):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
