@@ -217,6 +217,7 @@ class GoughStewart(Mechanism):
     pose_names = ("x", "y", "z", "tilt_x", "tilt_y", "torsion")
     angular = (False, False, False, True, True, True)
     length_unit = "mm"
+    angle_params = ("sep_base", "sep_platform", "cone_base", "cone_platform")
 
     default_fixed = {"r_base": 400.0, "q_min": 600.0, "q_max": 900.0, "cone_base": 45.0,
                      "cone_platform": 45.0, "cone_reference": "home", "homogenising": "platform"}
