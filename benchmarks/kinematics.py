@@ -37,13 +37,13 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--n", type=int, default=100_000, help="poses per call")
     args = parser.parse_args()
-    print(f"{'mechanism':<10}{'kernel':<20}{'poses/s':>14}")
+    print(f"{'mechanism':<14}{'kernel':<20}{'poses/s':>14}")
     for name, (params, (lo, hi)) in DESIGNS.items():
         mech = get_mechanism(name, **params)
         poses = np.random.default_rng(0).uniform(lo, hi, size=(args.n, len(lo)))
         for kernel in ("inverse", "inverse_condition"):
             seconds = best_of(lambda: getattr(mech, kernel)(poses))
-            print(f"{name:<10}{kernel:<20}{args.n / seconds:>14,.0f}")
+            print(f"{name:<14}{kernel:<20}{args.n / seconds:>14,.0f}")
 
 
 if __name__ == "__main__":
