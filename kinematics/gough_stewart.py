@@ -80,6 +80,7 @@ from scipy.stats import qmc, t as student_t
 
 from kinematics import kernels
 from kinematics.algebra import unique_rows, wrap_angle
+from kinematics.conditioning import inverse_condition_number
 from kinematics.base import (
     DesignVariable,
     Mechanism,
@@ -393,6 +394,26 @@ class GoughStewart(Mechanism):
         base, plat = self.cone_angles(poses)
         return (np.all(base <= math.radians(self.cone_base), axis=1)
                 & np.all(plat <= math.radians(self.cone_platform), axis=1))
+
+    def reachable_inverse_condition(self, poses: np.ndarray, length: float | None = None) -> np.ndarray | None:
+        """Compiled membership test (see the base class): IK, leg range, cone limits and
+        ``J diag(s)`` per pose in one loop (:func:`_reachable_jacobians`), then ``1/kappa`` of the
+        poses inside by :func:`kinematics.conditioning.inverse_condition_number`; None when the
+        numpy reference is selected."""
+        if not kernels.compiled():
+            return None
+        poses = np.ascontiguousarray(poses, dtype=float)
+        rot = np.ascontiguousarray(rotation(poses[:1])[0]) if _one_orientation(poses) else np.empty((0, 3, 3))
+        jac = _reachable_jacobians(
+            poses, rot, np.ascontiguousarray(self.base), np.ascontiguousarray(self.platform),
+            np.ascontiguousarray(self.base_axes), np.ascontiguousarray(self.platform_axes), self.q_min, self.q_max,
+            math.radians(self.cone_base), math.radians(self.cone_platform), self.angular_scale(length))
+        ic = np.full(poses.shape[0], np.nan)
+        inside = np.isfinite(jac[:, 0, 0])
+        # 6 x 6: batched LAPACK SVD, the numpy path's own conditioning (the compiled 2-4 x 4 one does
+        # not apply, and a per-pose SVD inside the loop was twice as slow)
+        ic[inside] = inverse_condition_number(jac[inside])
+        return ic
 
     def twist_jacobian(self, poses: np.ndarray) -> np.ndarray:
         """Inverse kinematic Jacobian in twist form (N, 6, 6): rows ``[u_i^T, (R p_i x u_i)^T]``.
@@ -753,4 +774,89 @@ def _newton_kernel(starts, q, base, platform, iterations, far):
                     small = False
             if not finite or math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]) > far or small:
                 break
+    return out
+
+
+@kernels.jit
+def _rotation_and_rate_map(a, b, torsion, rot, rate):
+    """``R`` of :func:`rotation` and ``M`` of :func:`angular_velocity_map` (each 3 x 3, written in
+    place) for tilt vector (a, b) and torsion (rad)."""
+    theta2 = a * a + b * b
+    theta = math.sqrt(theta2)
+    if theta < 1e-3:
+        sa = 1.0 - theta2 / 6.0 + theta2 * theta2 / 120.0
+        sb = 0.5 - theta2 / 24.0 + theta2 * theta2 / 720.0
+        sc = 1.0 / 6.0 - theta2 / 120.0 + theta2 * theta2 / 5040.0
+    else:
+        sa = math.sin(theta) / theta
+        sb = (1.0 - math.cos(theta)) / theta2
+        sc = (theta - math.sin(theta)) / (theta2 * theta)
+    hat = np.array([[0.0, 0.0, b], [0.0, 0.0, -a], [-b, a, 0.0]])
+    hat2 = np.array([[-b * b, a * b, 0.0], [a * b, -a * a, 0.0], [0.0, 0.0, -theta2]])
+    ct, st = math.cos(torsion), math.sin(torsion)
+    for r in range(3):
+        eye0 = 1.0 if r == 0 else 0.0
+        eye1 = 1.0 if r == 1 else 0.0
+        eye2 = 1.0 if r == 2 else 0.0
+        t0 = eye0 + sa * hat[r, 0] + sb * hat2[r, 0]
+        t1 = eye1 + sa * hat[r, 1] + sb * hat2[r, 1]
+        t2 = eye2 + sa * hat[r, 2] + sb * hat2[r, 2]
+        rot[r, 0] = t0 * ct + t1 * st
+        rot[r, 1] = -t0 * st + t1 * ct
+        rot[r, 2] = t2
+        rate[r, 0] = eye0 + sb * hat[r, 0] + sc * hat2[r, 0]
+        rate[r, 1] = eye1 + sb * hat[r, 1] + sc * hat2[r, 1]
+        rate[r, 2] = t2
+
+
+@kernels.jit
+def _reachable_jacobians(poses, one_rotation, base, platform, base_axes, platform_axes, q_min, q_max,
+                                  cone_base, cone_platform, column_scale):
+    """Per pose (N, 6) (mm, rad): legs ``c + R p_i - b_i`` (:meth:`GoughStewart._inverse`) within
+    ``q_min..q_max`` (mm), cone angles (rad) within ``cone_base`` / ``cone_platform``
+    (:meth:`GoughStewart.within_joint_limits`), and ``J diag(column_scale)`` with the rows of
+    :meth:`GoughStewart._jacobian`. ``one_rotation`` (3, 3): every pose's R when all share one
+    orientation, else shape (0, 3, 3). Returns (N, 6, 6), rows of NaN where the pose is out."""
+    count = poses.shape[0]
+    out = np.empty((count, 6, 6))
+    rot = np.empty((3, 3))
+    rate = np.empty((3, 3))
+    if one_rotation.shape[0] == 3:
+        rot[:, :] = one_rotation
+        _rotation_and_rate_map(poses[0, 3], poses[0, 4], poses[0, 5], np.empty((3, 3)), rate)
+    jac = np.empty((6, 6))
+    for p in range(count):
+        if not (np.isfinite(poses[p, 3]) and np.isfinite(poses[p, 4]) and np.isfinite(poses[p, 5])):
+            out[p, :, :] = np.nan
+            continue
+        if one_rotation.shape[0] != 3:
+            _rotation_and_rate_map(poses[p, 3], poses[p, 4], poses[p, 5], rot, rate)
+        ok = True
+        for i in range(6):
+            ax = rot[0, 0] * platform[i, 0] + rot[0, 1] * platform[i, 1] + rot[0, 2] * platform[i, 2]
+            ay = rot[1, 0] * platform[i, 0] + rot[1, 1] * platform[i, 1] + rot[1, 2] * platform[i, 2]
+            az = rot[2, 0] * platform[i, 0] + rot[2, 1] * platform[i, 1] + rot[2, 2] * platform[i, 2]
+            lx, ly, lz = ax + poses[p, 0] - base[i, 0], ay + poses[p, 1] - base[i, 1], az + poses[p, 2] - base[i, 2]
+            length = math.sqrt(lx * lx + ly * ly + lz * lz)
+            if not (q_min <= length <= q_max):
+                ok = False
+                break
+            ux, uy, uz = lx / length, ly / length, lz / length
+            cos_base = ux * base_axes[i, 0] + uy * base_axes[i, 1] + uz * base_axes[i, 2]
+            mx = rot[0, 0] * platform_axes[i, 0] + rot[0, 1] * platform_axes[i, 1] + rot[0, 2] * platform_axes[i, 2]
+            my = rot[1, 0] * platform_axes[i, 0] + rot[1, 1] * platform_axes[i, 1] + rot[1, 2] * platform_axes[i, 2]
+            mz = rot[2, 0] * platform_axes[i, 0] + rot[2, 1] * platform_axes[i, 1] + rot[2, 2] * platform_axes[i, 2]
+            cos_plat = ux * mx + uy * my + uz * mz
+            if not (math.acos(min(max(cos_base, -1.0), 1.0)) <= cone_base
+                    and math.acos(min(max(cos_plat, -1.0), 1.0)) <= cone_platform):
+                ok = False
+                break
+            wx, wy, wz = ay * uz - az * uy, az * ux - ax * uz, ax * uy - ay * ux
+            jac[i, 0], jac[i, 1], jac[i, 2] = ux * column_scale[0], uy * column_scale[1], uz * column_scale[2]
+            for j in range(3):
+                jac[i, 3 + j] = (wx * rate[0, j] + wy * rate[1, j] + wz * rate[2, j]) * column_scale[3 + j]
+        if not ok:
+            out[p, :, :] = np.nan
+            continue
+        out[p, :, :] = jac
     return out

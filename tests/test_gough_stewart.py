@@ -317,3 +317,22 @@ def test_compiled_newton_takes_the_numpy_steps(mech):
             reference = mech.assembly_modes(q, n_starts=128)
         assert fast.shape == reference.shape and len(fast) >= 2
         np.testing.assert_allclose(fast, reference, rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize("orientation", [(0.0, 0.0), (-0.3, 0.3)])
+def test_compiled_membership_matches_the_numpy_path(mech, orientation):
+    """The fused IK + limits + Jacobian kernel: same poses in and out, same 1/kappa (one
+    orientation: the rotation computed once; a box: per pose)."""
+    from kinematics import kernels
+    from kinematics.workspace import membership
+
+    lo, hi = mech.pose_bounds(orientation)
+    p = lo + (hi - lo) * np.random.default_rng(5).random((20000, 6))
+    assert mech.reachable_inverse_condition(p) is not None
+    inside, ic = membership(mech, p, orientation, 0.0)
+    with kernels.reference_kernels():
+        assert mech.reachable_inverse_condition(p) is None
+        ref_inside, ref_ic = membership(mech, p, orientation, 0.0)
+    np.testing.assert_array_equal(inside, ref_inside)
+    assert 100 < ref_inside.sum() < len(p) - 100
+    np.testing.assert_allclose(ic[ref_inside], ref_ic[ref_inside], rtol=1e-12)
