@@ -40,7 +40,6 @@ PROBLEMS = {
     "h4_max_volume": ("h4", "volume", 0.0),
     "tricept_max_volume": ("tricept", "volume", 0.0),
     "rpr3_mixed": ("rpr3", "mixed", 0.5),
-    "gough_stewart_mixed": ("gough_stewart", "mixed", 0.5),
 }
 GOLDEN = Path(__file__).with_name("best_known.json")
 #: the error estimate re-evaluates the optimum at this multiple of the default resolution

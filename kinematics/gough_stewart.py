@@ -76,11 +76,11 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.stats import qmc, t as student_t
+from scipy.stats import qmc
+from scipy.stats import t as student_t
 
 from kinematics import kernels
 from kinematics.algebra import unique_rows, wrap_angle
-from kinematics.conditioning import inverse_condition_number
 from kinematics.base import (
     DesignVariable,
     Mechanism,
@@ -89,6 +89,7 @@ from kinematics.base import (
     orientation_measure,
     sort_poses,
 )
+from kinematics.conditioning import inverse_condition_number
 
 
 def _joint_angles(separation_deg: float, centres_deg: np.ndarray, signs: np.ndarray) -> np.ndarray:
