@@ -2,7 +2,7 @@
 
 ``python -m benchmarks.optimiser_seeds [--seeds N] [--no-ga]`` reads the golden best-known
 optima (``benchmarks/best_known.json``, written by ``python -m benchmarks.best_known``; refused
-when the objective's sources changed since) and prints, per problem (built as the pipeline
+when a recorded design no longer evaluates to its value) and prints, per problem (built as the pipeline
 builds it: default resolution and readings):
 
 * the best known optimum, how it was found and its estimated discretisation error (its change
