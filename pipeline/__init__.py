@@ -1,7 +1,7 @@
 """pm-design's workflow: Hydra-configured, cached design studies of parallel mechanisms.
 
 Layers, each importing only layers below it (``[tool.importlinter]`` in
-pyproject.toml; ``docs/architecture.md``): cli | reproduction > sweeps >
+pyproject.toml; ``docs/architecture.md``): cli | reproduction > commands > sweeps >
 report | study > stages > config > evaluation | optimizers | store >
 objectives | errors.
 """

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import re
 import shutil
 import subprocess
 import sys
 from pathlib import Path
+from urllib.parse import unquote
 
 import matplotlib.image as mpimg
 import numpy as np
@@ -117,6 +119,7 @@ def _chromium() -> str | None:
     return shutil.which("chromium") or shutil.which("chromium-browser") or shutil.which("google-chrome")
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(_chromium() is None, reason="headless Chromium not installed (apt-get install chromium; "
                                                 "README: Tests)")
 def test_report_renders_in_a_real_browser(tmp_path):
@@ -136,6 +139,20 @@ def test_report_renders_in_a_real_browser(tmp_path):
     assert any("pm-design report ready: 4 runs" in ln for ln in console), browser.stderr[-2000:]
     assert not [ln for ln in console if "Uncaught" in ln or "Error" in ln], console
     assert_not_blank(shot)
+    # usable at 800 px: the page does not overflow sideways, and the figures fit
+    narrow = subprocess.run([_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+                             "--window-size=800,1600", "--enable-logging=stderr", "--v=0",
+                             f"--screenshot={tmp_path / 'narrow.png'}", report.as_uri()],
+                            capture_output=True, text=True, timeout=120)
+    widths = [ln for ln in narrow.stderr.splitlines() if "pm-design page width" in ln]
+    assert widths, narrow.stderr[-2000:]
+    width, of = re.search(r"page width (\d+) of (\d+)", widths[0]).groups()
+    assert int(width) <= int(of) <= 800, widths[0]
+    # the links are relative and still resolve once the sweep folder is moved elsewhere
+    moved = tmp_path / "moved"
+    shutil.copytree(report.parent, moved)
+    for link in re.findall(r'href="([^"]+)"', (moved / "report.html").read_text()):
+        assert (moved / unquote(link)).is_file(), link
     # the same command on the aggregated dataset
     dataset_report = subprocess.run([sys.executable, "-m", "pipeline.report", str(out / "dataset"), "--out",
                                      str(tmp_path / "dataset.html")], capture_output=True, text=True, cwd=ROOT)

@@ -50,4 +50,6 @@
     });
   });
   console.log("pm-design report ready: " + document.querySelectorAll("#optima tbody tr").length + " runs");
+  // the page itself never scrolls sideways (wide tables scroll inside their box): checked at 800 px
+  console.log("pm-design page width " + document.documentElement.scrollWidth + " of " + window.innerWidth);
 }());

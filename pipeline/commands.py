@@ -1,0 +1,197 @@
+"""The subcommands of ``pm-design`` (run before Hydra) and the one-line form of config errors.
+
+``pm-design evaluate`` (one given design: V, GDI, SURI, η), ``aggregate`` (runs
+into the dataset), ``report`` (``report.html``) and ``--help`` (commands and one
+line per experiment). :func:`one_line` and :func:`suggestion` turn a Hydra or
+OmegaConf error into one line with a did-you-mean; :mod:`pipeline.cli` uses them
+for a study's overrides too.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from omegaconf.errors import OmegaConfBaseException
+
+from pipeline.config import CONFIG_DIR, validate
+from pipeline.config.suggest import did_you_mean, key_suggestion
+from pipeline.errors import ConfigError, RunError
+
+
+def one_line(exc: BaseException) -> str:
+    """A Hydra or OmegaConf error as one line: its first line, plus the options it lists."""
+    lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+    if not lines:
+        return type(exc).__name__
+    text = lines[0]
+    if any(ln.startswith("Available options") for ln in lines):
+        start = next(k for k, ln in enumerate(lines) if ln.startswith("Available options")) + 1
+        options = [ln for ln in lines[start:] if not ln.startswith(("Config search path", "provider="))]
+        options = [ln.split()[0] for ln in options if ln and ":" not in ln]
+        text += f"; allowed: {', '.join(options)}"
+    elif len(lines) > 1 and not lines[1].startswith(("full_key", "object_type", "reference_type")):
+        text += f": {lines[1]}"
+    elif exc.__cause__ is not None and str(exc.__cause__).strip():
+        text += f": {str(exc.__cause__).strip().splitlines()[0]}"
+    return text
+
+
+def suggestion(exc: BaseException, argv: list[str]) -> str:
+    """Did-you-mean text for a Hydra error about an unknown key or group option (else empty).
+
+    Hydra's own advice for a mistyped key (``objective.wd=0.5``) is to append it
+    with ``+``; the user almost always meant an existing key (``objective.w_d``).
+    """
+    import re
+
+    text = str(exc)
+    key = re.search(r"Could not override '([^']+)'", text) or re.search(r"Key '([^']+)' is not in struct", text)
+    if key:
+        dotted = key.group(1)
+        full = next((a.split("=", 1)[0].lstrip("+~") for a in argv
+                     if a.split("=", 1)[0].lstrip("+~").endswith(dotted)), dotted)
+        return key_suggestion(full)
+    missing = re.search(r"Could not (?:find|load) '([^']+)/([^']+)'", text)
+    if missing:
+        group, name = missing.groups()
+        options = [p.stem for p in (CONFIG_DIR / group).glob("*.yaml")] if (CONFIG_DIR / group).is_dir() else []
+        if not options:
+            from hydra.core.config_store import ConfigStore
+
+            options = [o.removesuffix(".yaml") for o in ConfigStore.instance().list(group)] \
+                if ConfigStore.instance().repo.get(group) is not None else []
+        return did_you_mean(name, options)
+    return ""
+
+
+
+
+HELP = """usage: pm-design [+experiment=NAME] [key=value ...]       one study (python -m pipeline)
+       pm-design -m [+experiment=NAME] key=a,b,c ...        a sweep: one study per combination
+       pm-design evaluate mechanism=NAME VAR=VALUE ... [objective.w_d=W] [--parquet FILE]
+                                                            V, GDI, SURI, eta of one given design
+       pm-design aggregate DIR [DIR ...] [--dataset DIR]    runs below DIR into the dataset
+       pm-design report DIR [--out FILE]                    report.html of a sweep or dataset
+       pm-design --hydra-help                               Hydra's own options
+
+Results: outputs/runs/<experiment>/<launch id> (one run), outputs/sweeps/... (-m);
+every complete run is added to outputs/dataset (pipeline.store.read_dataset() reads it back).
+Presets: +debug=fast (tiny sizes; kept out of the dataset's default view), +reading=NAME.
+Config groups: mechanism={mechanisms}  objective={objectives}  optimizer={optimizers}
+
+Experiments (+experiment=NAME, conf/experiment/):
+{experiments}
+"""
+
+
+def print_help() -> None:
+    """``--help``: usage, subcommands, and one line per experiment."""
+    from kinematics import MECHANISMS
+    from pipeline.objectives import OBJECTIVES
+    from pipeline.optimizers import OPTIMIZERS
+    from pipeline.report.reference import experiment_summaries
+
+    summaries = experiment_summaries()
+    width = max(map(len, summaries), default=0)
+    print(HELP.format(mechanisms="|".join(MECHANISMS), objectives="|".join(OBJECTIVES),
+                      optimizers="|".join(OPTIMIZERS),
+                      experiments="\n".join(f"  {name:<{width}}  {text}" for name, text in summaries.items())))
+
+
+def evaluate_command(argv: list[str]) -> int:
+    """``pm-design evaluate mechanism=NAME VAR=VALUE ... [design=[...]] [key=value ...] [--parquet FILE]``.
+
+    Design variables by name (``a=250``) or all at once (``design=[250,400,100]``),
+    in the mechanism's design units; every other ``key=value`` is a config override
+    (``mechanism.fixed.stroke=120``, ``evaluate.resolution=24``, ``objective.w_d=0.3``).
+    Prints one table; ``--parquet FILE`` also writes it with units. Exit 2 on bad input.
+    """
+    import argparse
+
+    from hydra import compose, initialize_config_dir
+    from hydra.errors import HydraException
+
+    from kinematics import MECHANISMS
+    from pipeline.stages.design import evaluate_design
+    from pipeline.store.parquet import write_parquet
+
+    parser = argparse.ArgumentParser(prog="pm-design evaluate", description=evaluate_command.__doc__.split("\n")[0])
+    parser.add_argument("assignments", nargs="*", help="mechanism=NAME, design variables VAR=VALUE, overrides")
+    parser.add_argument("--parquet", type=Path, default=None, help="also write the row to this Parquet file")
+    args = parser.parse_args(argv)
+    given = dict(a.split("=", 1) for a in args.assignments if "=" in a)
+    bad = [a for a in args.assignments if "=" not in a]
+    try:
+        if bad:
+            raise ConfigError(f"{bad[0]} is invalid: allowed key=value")
+        name = given.pop("mechanism", "h4")
+        if name not in MECHANISMS:
+            raise ConfigError(f"mechanism={name} is invalid: allowed {', '.join(MECHANISMS)}"
+                              f"{did_you_mean(name, MECHANISMS)}")
+        variables = [v.name for v in MECHANISMS[name].design_variables]
+        if "design" in given:
+            text = given.pop("design").strip("[]() ")
+            design = [float(v) for v in text.split(",") if v.strip()]
+        else:
+            missing = [v for v in variables if v not in given]
+            if missing:
+                raise ConfigError(f"{missing[0]} is missing: allowed {' '.join(f'{v}=...' for v in variables)} "
+                                  f"or design=[...] ({name}'s design variables)")
+            design = [float(given.pop(v)) for v in variables]
+        overrides = [f"mechanism={name}", *(f"{k}={v}" for k, v in given.items()),
+                     "hydra.run.dir=.", "experiment_name=evaluate"]
+        with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3", job_name="pm-design"):
+            cfg = compose(config_name="config", overrides=overrides)
+        table = evaluate_design(validate(cfg), design)
+    except ValueError as exc:
+        print(f"error: design is invalid: {exc}; allowed numbers", file=sys.stderr)
+        return 2
+    except ConfigError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except (HydraException, OmegaConfBaseException) as exc:
+        print(f"error: {one_line(exc)}{suggestion(exc, list(args.assignments))}", file=sys.stderr)
+        return 2
+    row = table.iloc[0]
+    units = {v.name: v.unit for v in MECHANISMS[name].design_variables}
+    from pipeline.store.parquet import column_unit
+
+    for column, value in row.items():
+        unit = units.get(column) or column_unit(column)[0]
+        unit = row["volume_unit"] if unit == "volume_unit" else unit
+        text = f"{value:.6g}" if isinstance(value, float) else str(value)
+        print(f"{column:<24} {text:>14}  {unit if unit not in ('', '1') else ''}".rstrip())
+    if args.parquet is not None:
+        try:
+            write_parquet(table, args.parquet, {"mechanism": name, "design": design}, units)
+        except RunError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 1
+        print(f"wrote {args.parquet}")
+    return 0
+
+
+def subcommand(argv: list[str]) -> int | None:
+    """Run a subcommand (``evaluate``, ``aggregate``, ``report``) or ``--help``; None: a study for Hydra."""
+    if argv[:1] in (["--help"], ["-h"]):
+        print_help()
+        return 0
+    if not argv or argv[0] not in SUBCOMMANDS:
+        return None
+    return SUBCOMMANDS[argv[0]](argv[1:])
+
+
+def _aggregate_command(argv: list[str]) -> int:
+    from pipeline.stages.aggregate import main as aggregate_main
+
+    return aggregate_main(argv)
+
+
+def _report_command(argv: list[str]) -> int:
+    from pipeline.report.html import main as report_main
+
+    return report_main(argv)
+
+
+SUBCOMMANDS = {"evaluate": evaluate_command, "aggregate": _aggregate_command, "report": _report_command}
