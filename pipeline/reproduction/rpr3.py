@@ -79,7 +79,7 @@ def rpr3(r: Reproduction) -> None:
         return "<br>".join("[" + ", ".join(f"{v:.4g}" for v in row) + "]" for row in a)
 
     area_rows = []
-    fig, axes = plt.subplots(1, 4, figsize=(18, 4.5))
+    fig, axes = plt.subplots(1, 4, figsize=(18, 4.5), layout="constrained")
     for ax, deg in zip(axes, (15, 30, 45, 60)):
         phi = math.radians(deg)
         ev = r.memo(evaluate)(m, orientation=(phi, phi), min_inverse_condition=0.0, resolution=240,
