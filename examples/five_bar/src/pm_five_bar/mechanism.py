@@ -146,12 +146,16 @@ class FiveBar(Mechanism):
         The law of cosines in the triangle ``A_i C_i P``; ``s = (+1, -1)`` is the
         elbows-out mode; NaN where ``rho_i`` is outside ``|l1 - l2|..l1 + l2``.
         """
-        rel = poses[:, None, :] - self.base  # (N, 2 legs, 2): P - A_i
-        rho = np.hypot(rel[..., 0], rel[..., 1])
+        dx = poses[:, 0, None] - self.base[:, 0]  # (N, 2 legs): P - A_i, columns x and y
+        dy = np.repeat(poses[:, 1, None], 2, axis=1)
+        rho = np.hypot(dx, dy)
         cos_elbow = (self.l1**2 + rho**2 - self.l2**2) / (2.0 * self.l1 * rho)
         cos_elbow[np.abs(cos_elbow) > 1.0] = np.nan
-        theta = np.arctan2(rel[..., 1], rel[..., 0]) + self.ELBOW * np.arccos(cos_elbow)
-        return np.arctan2(np.sin(theta), np.cos(theta))  # to (-pi, pi]
+        theta = np.arctan2(dy, dx) + self.ELBOW * np.arccos(cos_elbow)  # in (-2 pi, 2 pi)
+        # to (-pi, pi]: one shift by 2 pi (cheaper than atan2(sin, cos), same angle)
+        theta[theta > math.pi] -= 2.0 * math.pi
+        theta[theta <= -math.pi] += 2.0 * math.pi
+        return theta
 
     def _elbows(self, theta: np.ndarray) -> np.ndarray:
         """Elbow points ``C_i = A_i + l1 (cos theta_i, sin theta_i)`` (mm), shape (..., 2, 2)."""
@@ -165,9 +169,11 @@ class FiveBar(Mechanism):
         leg is stretched or folded (``(P - C_i) . t_i = 0``).
         """
         theta = self._inverse(poses)
-        distal = poses[:, None, :] - self._elbows(theta)  # (N, 2, 2): P - C_i
-        tangent = self.l1 * np.stack([-np.sin(theta), np.cos(theta)], axis=-1)
-        denom = np.sum(distal * tangent, axis=-1)
+        cos_t, sin_t = np.cos(theta), np.sin(theta)
+        distal = np.empty(theta.shape + (2,))  # (N, 2 legs, 2): P - C_i
+        distal[..., 0] = poses[:, 0, None] - self.base[:, 0] - self.l1 * cos_t
+        distal[..., 1] = poses[:, 1, None] - self.l1 * sin_t
+        denom = self.l1 * (distal[..., 1] * cos_t - distal[..., 0] * sin_t)
         jac = distal / denom[..., None]
         jac[denom == 0] = np.inf
         return jac

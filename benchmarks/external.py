@@ -1,0 +1,72 @@
+"""Cost of an external mechanism written in pure numpy against a built-in compiled one.
+
+Run: ``pip install --no-deps examples/five_bar`` once, then
+``python -m benchmarks.external``. Side by side in this one run, one core,
+best of several repeats, ``error_estimate=False`` (one grid per evaluation,
+as the optimisers evaluate):
+
+1. per-design evaluation (``kinematics.workspace.evaluate``) of the example's
+   planar five-bar (``examples/five_bar``, numpy only: it has no compiled
+   kernel) and of the built-in planar 2-RPR with its compiled kernel and with
+   the numpy reference (``PM_DESIGN_KERNELS=numpy``), on 2-D grids of the
+   same node counts; ns per grid node and the ratio to the compiled 2-RPR;
+2. the conformance harness (``kinematics.testing.check_mechanism``) per
+   mechanism, warm.
+
+The 2-RPR is the closest built-in to the five-bar (planar, two legs, two
+pose variables); its numpy path does less arithmetic per node (square roots
+against the five-bar's arctan2, arccos, sin and cos), so the numpy-vs-numpy
+ratio also shows what the five-bar's own kinematics cost.
+"""
+
+from __future__ import annotations
+
+import time
+
+from benchmarks.evaluate import best_time
+from kinematics import MECHANISMS, get_mechanism, kernels, resolve_mechanism
+from kinematics.plugins import PluginError
+from kinematics.testing import check_mechanism
+from kinematics.workspace import evaluate
+
+#: the example's class, by path (it needs no entry point to be benchmarked)
+FIVE_BAR = "pm_five_bar.mechanism:FiveBar"
+RESOLUTIONS = (160, 400)  # the five-bar's default (160^2 nodes) and the 2-RPR's (400^2)
+
+
+def main() -> None:
+    try:
+        five_bar_cls = resolve_mechanism(FIVE_BAR)
+    except PluginError as exc:
+        raise SystemExit(f"{exc}; install the example first: pip install --no-deps examples/five_bar") from None
+    five_bar = five_bar_cls.from_design([40.0, 30.0], **five_bar_cls.default_fixed)
+    rpr2 = get_mechanism("rpr2", b=5.0, q_min=6.0, q_max=9.6)
+
+    print("1. one evaluation (ms), one core, best of 7; ns per grid node in brackets")
+    print(f"{'resolution':>10} {'nodes':>8} | {'five-bar numpy':>18} | {'2-RPR compiled':>18} | "
+          f"{'2-RPR numpy':>18} | five-bar/2-RPR compiled | five-bar/2-RPR numpy")
+    for res in RESOLUTIONS:
+        nodes = res * res
+
+        def timed(mech, res=res):
+            evaluate(mech, resolution=res, error_estimate=False)  # warm (numba loads its cache)
+            return best_time(lambda: evaluate(mech, resolution=res, error_estimate=False), 7)
+
+        five = timed(five_bar)
+        compiled = timed(rpr2)
+        with kernels.reference_kernels():
+            numpy_ref = timed(rpr2)
+        cells = [f"{1e3 * t:8.2f} ({1e9 * t / nodes:5.1f})" for t in (five, compiled, numpy_ref)]
+        print(f"{res:>10} {nodes:>8,} | {cells[0]:>18} | {cells[1]:>18} | {cells[2]:>18} | "
+              f"{five / compiled:22.1f}x | {five / numpy_ref:19.1f}x")
+
+    print("\n2. conformance harness per mechanism (s, warm)")
+    for name, cls in [*MECHANISMS.builtins.items(), ("five_bar (example)", five_bar_cls)]:
+        check_mechanism(cls)
+        t0 = time.perf_counter()
+        failures = check_mechanism(cls)
+        print(f"{name:>20}: {time.perf_counter() - t0:5.2f} s, {len(failures)} failures")
+
+
+if __name__ == "__main__":
+    main()
