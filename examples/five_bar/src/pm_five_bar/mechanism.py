@@ -140,40 +140,49 @@ class FiveBar(Mechanism):
         return np.full(2, -math.pi), np.full(2, math.pi)
 
     # ------------------------------------------------------------- kernels
-    def _inverse(self, poses: np.ndarray) -> np.ndarray:
-        """``theta_i = atan2(P - A_i) + s_i acos((l1^2 + rho_i^2 - l2^2) / (2 l1 rho_i))`` (rad), (N, 2).
+    def _proximal(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``P - A_i`` and the proximal links ``C_i - A_i`` (mm), x and y columns, each (N, 2 legs).
 
-        The law of cosines in the triangle ``A_i C_i P``; ``s = (+1, -1)`` is the
-        elbows-out mode; NaN where ``rho_i`` is outside ``|l1 - l2|..l1 + l2``.
+        ``C_i`` is where the circles of radius l1 around A_i and l2 around P
+        cross: with ``v = P - A_i`` and ``rho = |v|``, the law of cosines puts
+        it at ``a = (l1^2 - l2^2 + rho^2) / (2 rho)`` along ``v`` and
+        ``s_i sqrt(l1^2 - a^2)`` along ``v`` turned by +90 degrees (``s = (+1, -1)``:
+        elbows out), i.e. ``C_i - A_i = f v + g rot90(v)`` with ``f = a / rho``,
+        ``g = s_i sqrt(l1^2 - a^2) / rho``. Square roots only: trigonometric
+        functions cost numpy 5-10x more per pose. NaN where ``rho`` is outside
+        ``|l1 - l2|..l1 + l2`` (the square root of a negative number).
         """
-        dx = poses[:, 0, None] - self.base[:, 0]  # (N, 2 legs): P - A_i, columns x and y
-        dy = np.repeat(poses[:, 1, None], 2, axis=1)
-        rho = np.hypot(dx, dy)
-        cos_elbow = (self.l1**2 + rho**2 - self.l2**2) / (2.0 * self.l1 * rho)
-        cos_elbow[np.abs(cos_elbow) > 1.0] = np.nan
-        theta = np.arctan2(dy, dx) + self.ELBOW * np.arccos(cos_elbow)  # in (-2 pi, 2 pi)
-        # to (-pi, pi]: one shift by 2 pi (cheaper than atan2(sin, cos), same angle)
-        theta[theta > math.pi] -= 2.0 * math.pi
-        theta[theta <= -math.pi] += 2.0 * math.pi
-        return theta
+        vx = poses[:, 0, None] - self.base[:, 0]
+        vy = np.repeat(poses[:, 1, None], 2, axis=1)
+        rho2 = vx * vx + vy * vy
+        f = (self.l1**2 - self.l2**2 + rho2) / (2.0 * rho2)
+        g = self.ELBOW * np.sqrt(self.l1**2 / rho2 - f * f)
+        return vx, vy, f * vx - g * vy, f * vy + g * vx
+
+    def _inverse(self, poses: np.ndarray) -> np.ndarray:
+        """``theta_i = atan2(C_i - A_i)`` (rad) in (-pi, pi], shape (N, 2); NaN where unreachable.
+
+        Equal to ``atan2(P - A_i) + s_i acos((l1^2 + rho_i^2 - l2^2) / (2 l1 rho_i))``, the
+        law of cosines in the triangle ``A_i C_i P`` (see :meth:`_proximal`).
+        """
+        _, _, cx, cy = self._proximal(poses)
+        return np.arctan2(cy, cx)
 
     def _elbows(self, theta: np.ndarray) -> np.ndarray:
         """Elbow points ``C_i = A_i + l1 (cos theta_i, sin theta_i)`` (mm), shape (..., 2, 2)."""
         return self.base + self.l1 * np.stack([np.cos(theta), np.sin(theta)], axis=-1)
 
     def _jacobian(self, poses: np.ndarray) -> np.ndarray:
-        """Rows ``(P - C_i)^T / ((P - C_i) . t_i)`` (rad/mm), ``t_i = l1 (-sin theta_i, cos theta_i)``.
+        """Rows ``(P - C_i)^T / ((P - C_i) . t_i)`` (rad/mm), shape (N, 2, 2).
 
-        Differentiating the closure ``|P - C_i|^2 = l2^2``:
-        ``(P - C_i) . (dP - t_i dtheta_i) = 0``. A row is infinite where the
-        leg is stretched or folded (``(P - C_i) . t_i = 0``).
+        ``t_i = rot90(C_i - A_i) = l1 (-sin theta_i, cos theta_i) = dC_i/dtheta_i``.
+        Differentiating the closure ``|P - C_i|^2 = l2^2`` gives
+        ``(P - C_i) . (dP - t_i dtheta_i) = 0``. A row is infinite where the leg
+        is stretched or folded (``(P - C_i) . t_i = 0``).
         """
-        theta = self._inverse(poses)
-        cos_t, sin_t = np.cos(theta), np.sin(theta)
-        distal = np.empty(theta.shape + (2,))  # (N, 2 legs, 2): P - C_i
-        distal[..., 0] = poses[:, 0, None] - self.base[:, 0] - self.l1 * cos_t
-        distal[..., 1] = poses[:, 1, None] - self.l1 * sin_t
-        denom = self.l1 * (distal[..., 1] * cos_t - distal[..., 0] * sin_t)
+        vx, vy, cx, cy = self._proximal(poses)
+        distal = np.stack([vx - cx, vy - cy], axis=-1)  # (N, 2 legs, 2): P - C_i
+        denom = distal[..., 1] * cx - distal[..., 0] * cy
         jac = distal / denom[..., None]
         jac[denom == 0] = np.inf
         return jac
