@@ -42,8 +42,9 @@ arrays):
     Moving each design variable (others at the centre) changes the volume,
     GDI or SURI.
 
-Sizes are tiny (8 reachable poses, the coarsest accepted grid): about 0.1-1 s
-per mechanism.
+Sizes are tiny (8 reachable poses, the coarsest accepted grid): 0.02-0.3 s
+per built-in mechanism, the Tricept about 1-1.5 s (its forward kinematics),
+warm (``python -m benchmarks.external``).
 """
 
 from __future__ import annotations
@@ -193,8 +194,9 @@ def _reachable(mech: Mechanism, poses: np.ndarray) -> np.ndarray:
     return ok
 
 
-def _check_shapes(mech: Mechanism, rng: np.random.Generator, n_box: int) -> tuple[np.ndarray, list[str]]:
-    """Shapes of every public result; returns the sampled box poses (n_box, dof)."""
+def _check_shapes(mech: Mechanism, rng: np.random.Generator, n_box: int) -> np.ndarray:
+    """Shapes of every public result (raises :class:`_Stop` at the first wrong one); returns the
+    poses (n_box, dof) it drew in ``pose_bounds``."""
     dof = mech.dof
 
     def expect(what: str, value: object, shape: tuple[int, ...]) -> np.ndarray:
@@ -246,7 +248,7 @@ def _check_shapes(mech: Mechanism, rng: np.random.Generator, n_box: int) -> tupl
         sols = np.asarray(mech.forward(mech.inverse(reachable[:1])[0]))
         if sols.ndim != 2 or sols.shape[1] != dof:
             raise _Stop(f"shapes: forward(q) has shape {sols.shape}; expected (k, {dof})")
-    return poses, []
+    return poses
 
 
 def _check_batch(mech: Mechanism, poses: np.ndarray) -> list[str]:
@@ -286,14 +288,25 @@ def _check_round_trip(mech: Mechanism, poses: np.ndarray) -> list[str]:
             f"tolerance {ROUND_TRIP_RTOL:g})"]
 
 
-def _check_jacobian(mech: Mechanism, poses: np.ndarray) -> list[str]:
-    jac = mech.jacobian(poses)
-    step = 1e-6 * (1.0 + np.abs(poses))
-    fd = np.empty_like(jac)
+def central_differences(mech: Mechanism, poses: np.ndarray, relative_step: float = 1e-6) -> np.ndarray:
+    """Central-difference Jacobian of ``mech.inverse`` at ``poses`` (N, dof), shape (N, dof, dof).
+
+    Step ``relative_step * (1 + |x_j|)`` per pose variable (in its unit);
+    entry ``[n, i, j]`` approximates ``d q_i / d x_j`` like :meth:`Mechanism.jacobian`.
+    """
+    poses = np.asarray(poses, dtype=float)
+    step = relative_step * (1.0 + np.abs(poses))
+    fd = np.empty((poses.shape[0], mech.dof, mech.dof))
     for j in range(mech.dof):
         dp = np.zeros_like(poses)
         dp[:, j] = step[:, j]
         fd[:, :, j] = (mech.inverse(poses + dp) - mech.inverse(poses - dp)) / (2 * step[:, [j]])
+    return fd
+
+
+def _check_jacobian(mech: Mechanism, poses: np.ndarray) -> list[str]:
+    jac = mech.jacobian(poses)
+    fd = central_differences(mech, poses)
     scale = np.abs(jac).max(axis=(1, 2))
     with np.errstate(invalid="ignore"):
         rel = np.abs(fd - jac).max(axis=(1, 2)) / scale
@@ -397,8 +410,7 @@ def check_mechanism(cls: type[Mechanism], *, seed: int = 0, n_poses: int = 8,
     res = int(resolution if resolution is not None else cls.min_resolution)
     try:
         mech, failures = _check_build(cls)
-        box, shape_failures = _check_shapes(mech, rng, 64 * n_poses)
-        failures += shape_failures
+        box = _check_shapes(mech, rng, 64 * n_poses)
         reachable = box[_reachable(mech, box)]
         with np.errstate(invalid="ignore"):
             reachable = reachable[mech.inverse_condition(reachable) > SINGULAR_IC][:n_poses]
@@ -441,4 +453,4 @@ def assert_conforms(cls: type[Mechanism], *, seed: int = 0, n_poses: int = 8,
         raise AssertionError(f"{name} fails {len(failures)} conformance check(s):\n" + "\n".join(failures))
 
 
-__all__ = ["assert_conforms", "check_mechanism"]
+__all__ = ["assert_conforms", "central_differences", "check_mechanism"]

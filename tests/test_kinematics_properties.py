@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from kinematics import get_mechanism
+from kinematics.testing import central_differences
 from tests.conftest import PAPER_DESIGNS, random_poses
 
 N_ROUND_TRIP = 1000
@@ -47,12 +48,7 @@ def test_jacobian_matches_central_differences(name):
     poses, _ = _reachable(m, random_poses(name, 400, seed=5))
     poses = poses[m.inverse_condition(poses) > 1e-3][:200]
     jac = m.jacobian(poses)
-    step = 1e-6 * (1.0 + np.abs(poses))
-    fd = np.empty_like(jac)
-    for j in range(m.dof):
-        dp = np.zeros_like(poses)
-        dp[:, j] = step[:, j]
-        fd[:, :, j] = (m.inverse(poses + dp) - m.inverse(poses - dp)) / (2 * step[:, [j]])
+    fd = central_differences(m, poses)
     scale = np.abs(jac).max(axis=(1, 2), keepdims=True)
     assert np.max(np.abs(fd - jac) / scale) < 1e-6
 

@@ -12,15 +12,24 @@ alike); see :func:`kinematics.plugins.config_search_paths`.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 from hydra.core.config_search_path import ConfigSearchPath
 from hydra.plugins.search_path_plugin import SearchPathPlugin
 
 from kinematics.plugins import config_search_paths
 
 
+@lru_cache(maxsize=1)
+def _search_paths() -> tuple[str, ...]:
+    """Why cached: Hydra builds a search path several times per command (the precheck, the run,
+    each sweep job), and each scan reads every installed distribution's entry points."""
+    return tuple(config_search_paths())
+
+
 class ExternalMechanismConfigs(SearchPathPlugin):
     """Appends ``pkg://<package>`` of every ``pm_design.configs`` entry point."""
 
     def manipulate_search_path(self, search_path: ConfigSearchPath) -> None:
-        for path in config_search_paths():
+        for path in _search_paths():
             search_path.append(provider="pm-design-plugins", path=path)
