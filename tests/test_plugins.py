@@ -117,10 +117,10 @@ def write_distribution(folder: Path, name: str, entry_points: dict[str, dict[str
 
 def test_installed_entry_points_are_discovered(tmp_path, monkeypatch):
     write_distribution(tmp_path, "renamed_rpr2", {ENTRY_POINT_GROUP: {"renamed_rpr2": "tests.test_plugins:Renamed"},
-                                                  CONFIG_ENTRY_POINT_GROUP: {"renamed_rpr2": "pipeline.conf"}})
+                                                  CONFIG_ENTRY_POINT_GROUP: {"renamed_rpr2": "pipeline.config"}})
     monkeypatch.syspath_prepend(str(tmp_path))
     assert entry_point_mechanisms(MECHANISMS.builtins) == {"renamed_rpr2": Renamed}
-    assert config_search_paths() == ["pkg://pipeline.conf"]
+    assert config_search_paths() == ["pkg://pipeline.config"]
     registry = kinematics.MechanismRegistry(MECHANISMS.builtins)
     assert list(registry) == ["delta", "h4", "rpr2", "rpr3", "tricept", "renamed_rpr2"]
 
