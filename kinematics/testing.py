@@ -42,9 +42,9 @@ arrays):
     Moving each design variable (others at the centre) changes the volume,
     GDI or SURI.
 
-Sizes are tiny (8 reachable poses, the coarsest accepted grid): 0.02-0.3 s
-per built-in mechanism, the Tricept about 1-1.5 s (its forward kinematics),
-warm (``python -m benchmarks.external``).
+Sizes are tiny (8 reachable poses, the coarsest accepted grid): 0.01-0.06 s
+of CPU time per built-in mechanism, the Tricept 1.2 s (its forward
+kinematics), warm (``python -m benchmarks.external``).
 """
 
 from __future__ import annotations
