@@ -11,8 +11,13 @@ import pytest
 
 import kinematics
 from kinematics import MECHANISMS, resolve_mechanism
-from kinematics.plugins import (CONFIG_ENTRY_POINT_GROUP, ENTRY_POINT_GROUP, PluginError, config_search_paths,
-                                entry_point_mechanisms)
+from kinematics.plugins import (
+    CONFIG_ENTRY_POINT_GROUP,
+    ENTRY_POINT_GROUP,
+    PluginError,
+    config_search_paths,
+    entry_point_mechanisms,
+)
 from kinematics.rpr2 import RPR2
 
 ROOT = Path(__file__).resolve().parents[1]
