@@ -83,6 +83,7 @@ from kinematics import kernels
 from kinematics.algebra import unique_rows, wrap_angle
 from kinematics.base import (
     DesignVariable,
+    FixedParameter,
     Mechanism,
     check_positive,
     check_range,
@@ -221,8 +222,16 @@ class GoughStewart(Mechanism):
     length_unit = "mm"
     angle_params = ("sep_base", "sep_platform", "cone_base", "cone_platform")
 
-    default_fixed = {"r_base": 400.0, "q_min": 600.0, "q_max": 900.0, "cone_base": 45.0,
-                     "cone_platform": 45.0, "cone_reference": "home", "homogenising": "platform"}
+    #: the pipeline's ``mechanism.fixed`` values and their ranges (``default_fixed`` derives from them)
+    fixed_parameters = (
+        FixedParameter("r_base", 400.0, 10.0, 10000.0, "mm"),
+        FixedParameter("q_min", 600.0, 10.0, 20000.0, "mm"),
+        FixedParameter("q_max", 900.0, 10.0, 20000.0, "mm"),
+        FixedParameter("cone_base", 45.0, 1.0, 179.0, "deg"),
+        FixedParameter("cone_platform", 45.0, 1.0, 179.0, "deg"),
+        FixedParameter("cone_reference", "home", choices=("home", "normal")),
+        FixedParameter("homogenising", "platform", choices=("platform", "base", "mean")),
+    )
     #: 32^3 nodes: the constant-orientation default samples (x, y, z)
     default_nodes = 32**3
     min_resolution = 16

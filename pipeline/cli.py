@@ -28,6 +28,7 @@ from omegaconf import DictConfig
 from omegaconf.errors import OmegaConfBaseException
 
 from pipeline.commands import evaluate_command, one_line, print_help, subcommand, suggestion  # noqa: F401
+from kinematics.plugins import PluginError
 from pipeline.config import CONFIG_DIR, guard, register_configs, validate
 from pipeline.errors import ConfigError, RunError, Terminated, check_writable, describe_fault
 from pipeline.evaluation import workers
@@ -224,7 +225,10 @@ def _exit_on_interrupt(exc: KeyboardInterrupt) -> None:
     sys.exit(code)
 
 
-register_configs()
+try:
+    register_configs()
+except PluginError:  # a broken plug-in: entry() registers again and reports it in one line
+    pass
 
 
 @hydra.main(version_base="1.3", config_path=str(CONFIG_DIR), config_name="config")
@@ -249,6 +253,7 @@ def entry() -> None:
     logging.raiseExceptions = False
     signal.signal(signal.SIGTERM, _on_sigterm)
     try:
+        register_configs()
         code = subcommand(sys.argv[1:])
         if code is not None:
             sys.exit(code)
@@ -256,6 +261,9 @@ def entry() -> None:
         main()
     except KeyboardInterrupt as exc:
         _exit_on_interrupt(exc)
+    except PluginError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        sys.exit(2)
     except (ConfigError, HydraException, OmegaConfBaseException) as exc:
         if full_error:
             raise

@@ -26,6 +26,8 @@ def register_configs() -> None:
         OmegaConf.register_new_resolver("run_id", launch_id)
     cs = ConfigStore.instance()
     cs.store(name="config_schema", node=Config)
+    # a class of the user's own by its path, without an entry point: mechanism=path mechanism.name=pkg.mod:Cls
+    cs.store(group="mechanism", name="path", node=MechanismConfig)
     for name, cls in MECHANISMS.items():
         cs.store(group="mechanism", name=name, node=MechanismConfig.for_class(cls))
     for name, objective in OBJECTIVES.items():

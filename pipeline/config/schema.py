@@ -22,7 +22,8 @@ from typing import Any, Optional
 import numpy as np
 from omegaconf import MISSING
 
-from kinematics import MECHANISMS
+from kinematics import MECHANISMS, resolve_mechanism
+from kinematics.plugins import PluginError
 from kinematics.base import Mechanism
 from pipeline.errors import ConfigError, check, finite
 from pipeline.objectives import OBJECTIVES
@@ -68,7 +69,13 @@ class MechanismConfig:
     length: Optional[float] = None
 
     def __post_init__(self) -> None:
-        check("mechanism.name", self.name, self.name in MECHANISMS, "one of " + ", ".join(MECHANISMS))
+        if not isinstance(self.name, str) or not (self.name in MECHANISMS or ":" in self.name):
+            check("mechanism.name", self.name, False, "one of " + ", ".join(MECHANISMS)
+                  + ", or 'package.module:Class' with mechanism=path")
+        try:
+            self.cls
+        except PluginError as exc:
+            raise ConfigError(f"mechanism.name={self.name!r} is invalid: {exc}") from None
         cls = self.cls
         expected = [v.name for v in cls.design_variables]
         d = self.design
@@ -99,7 +106,8 @@ class MechanismConfig:
 
     @property
     def cls(self) -> type[Mechanism]:
-        return MECHANISMS[self.name]
+        """The mechanism class: a registry name or a ``package.module:Class`` path."""
+        return resolve_mechanism(self.name)
 
     @property
     def centre(self) -> np.ndarray:

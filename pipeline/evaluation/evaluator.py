@@ -18,7 +18,7 @@ from joblib import Parallel, delayed
 from joblib._parallel_backends import LokyBackend
 from joblib.parallel import get_active_backend
 
-from kinematics import MECHANISMS
+from kinematics import resolve_mechanism
 from kinematics.workspace import evaluate
 from pipeline.evaluation import compile_ahead, workers
 from pipeline.evaluation.scale import retry_lost_workers, workers_for
@@ -49,7 +49,7 @@ class MechanismSpec:
 
     def build(self, design: np.ndarray):
         """The mechanism of one design vector (design units); ValueError if infeasible."""
-        return MECHANISMS[self.name].from_design(np.asarray(design, dtype=float), **dict(self.fixed))
+        return resolve_mechanism(self.name).from_design(np.asarray(design, dtype=float), **dict(self.fixed))
 
 
 @dataclass(frozen=True)

@@ -120,7 +120,8 @@ def reference_page() -> str:
         lines += [f"## `{name}`", "", _first_line(cls.__doc__), ""] + dataclass_table(f"{name}.", cls) + [""]
     lines += ["## `mechanism`", "", _first_line(schema.MechanismConfig.__doc__), ""]
     lines += dataclass_table("mechanism.", schema.MechanismConfig) + [""]
-    for name in sorted(MECHANISMS):
+    # the built-ins only: an installed plug-in must not make the committed page stale
+    for name in sorted(MECHANISMS.builtins):
         lines += mechanism_section(name, MECHANISMS[name])
     lines += ["## `objective`", "", _first_line(schema.ObjectiveConfig.__doc__), "",
               "| option | label | unit | default `w_d` |", "| --- | --- | --- | --- |"]
@@ -140,7 +141,7 @@ def reference_page() -> str:
     lines += ["", "### Units rule", "", units_rule(), "",
               "Design variables and mechanism parameters, per mechanism (`param_*` columns as named in the "
               "dataset):", "", "| mechanism | design variables | `param_*` columns |", "| --- | --- | --- |"]
-    for name in sorted(MECHANISMS):
+    for name in sorted(MECHANISMS.builtins):
         cls = MECHANISMS[name]
         names = {v.name for v in cls.design_variables}
         variables = ", ".join(f"`{v.name}` [{v.unit}]" for v in cls.design_variables)
