@@ -1,42 +1,46 @@
-"""The sweeper of ``python -m pipeline -m``: Hydra's basic sweeper, made safe for datasets.
+"""The sweeper of ``python -m pipeline -m``, on Hydra's public ``Sweeper`` plugin interface.
 
-* **every job is validated before the first computes**: each job's config is
-  composed and checked (:func:`pipeline.config.validate`); a bad one stops
-  the sweep with one line naming the job's overrides and the field, exit 2,
-  nothing written;
+* **every job is validated before the first computes**: the sweep is expanded
+  (:func:`pipeline.sweeps.jobs.sweep_jobs`), each job's config is composed and
+  checked (:func:`pipeline.config.validate`); a bad one stops the sweep with
+  one line naming the job's overrides and the field, exit 2, nothing written;
+  only then are the jobs launched, in batches of ``max_batch_size``;
 * a sweep directory that already holds anything is refused (no mixing of
   stale runs into a new sweep);
 * a job that fails at run time does not stop the sweep (the task records it
   in its manifest and returns); at the end the completed jobs are
-  aggregated into ``paths.dataset_dir``, ``tradeoff.png`` and ``report.html``
-  (:mod:`pipeline.report`) are written into the sweep directory, and a
-  one-line summary is printed; the exit status is 1 if any job failed.
+  aggregated (:func:`finish_sweep`) into ``paths.dataset_dir``, ``tradeoff.png``
+  and ``report.html`` in the sweep directory, and a one-line summary is
+  printed; the exit status is 1 if any job failed.
 
 It takes the sweep from the command line and from ``hydra.sweeper.params``
 (so an experiment file can declare its own sweep), and launches through
-whatever launcher is configured (basic, joblib, submitit): every job gets the
-sweep's launch id and literal sweep directory, also in another process, and a
-launcher running jobs side by side must leave one core per worker
-(jobs x ``parallel.n_jobs`` <= cores; SLURM: ``parallel.n_jobs`` <= ``cpus_per_task``).
+whatever launcher is configured (basic, joblib, submitit, ...), knowing
+nothing of it: every job gets the sweep's launch id and literal sweep
+directory, also in another process. How many fitness workers a job may use is
+decided by the job itself, from the cores it is given
+(:func:`pipeline.evaluation.worker_count`).
 """
 
 from __future__ import annotations
 
 import logging
 import os
-import shutil
 import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence
 
-from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
+from hydra.core.plugins import Plugins
+from hydra.core.utils import JobReturn
 from hydra.errors import HydraException
 from hydra.plugins.sweeper import Sweeper
-from omegaconf import open_dict
+from hydra.types import HydraContext, TaskFunction
+from omegaconf import DictConfig, OmegaConf, open_dict
 from omegaconf.errors import OmegaConfBaseException
 
 from pipeline.errors import ConfigError, RunError
+from pipeline.sweeps.jobs import batches, declared_overrides, sweep_jobs
 
 log = logging.getLogger(__name__)
 
@@ -53,65 +57,28 @@ def _fail(message: str, code: int = 2) -> None:
     sys.exit(code)
 
 
-def _launcher_kind(launcher) -> str:
-    return str(launcher.get("_target_", "")).rsplit(".", 1)[-1]
+def job_label(k: int, overrides: Sequence[str]) -> str:
+    return f"job {k} ({' '.join(overrides)})"
 
 
-def jobs_side_by_side(launcher, n_jobs_in_batch: int) -> int:
-    """How many jobs of a batch the configured launcher runs at once on this machine.
+class CheckedSweeper(Sweeper):
+    """See the module docstring. Hydra calls :meth:`setup`, then :meth:`sweep` with the command line's overrides."""
 
-    Basic launcher: 1. Hydra's joblib launcher: its ``n_jobs`` (joblib's
-    convention: -1 = every core). submitit's local launcher: every job of the
-    batch. SLURM: 1 per allocation (jobs run on their own CPUs).
-    """
-    kind = _launcher_kind(launcher)
-    cores = os.cpu_count() or 1
-    if kind == "JoblibLauncher":
-        n = int(launcher.get("n_jobs") or 1)
-        n = cores + 1 + n if n < 0 else n
-        return max(1, min(n, n_jobs_in_batch))
-    if kind == "LocalLauncher":
-        return max(1, n_jobs_in_batch)
-    return 1
-
-
-def check_workers(launcher, side_by_side: int, workers: int) -> None:
-    """jobs side by side x ``parallel.n_jobs`` <= cores (SLURM: ``parallel.n_jobs`` <= cpus_per_task).
-
-    Raises
-    ------
-    ConfigError
-        One line naming ``parallel.n_jobs`` and the largest allowed value.
-    """
-    kind = _launcher_kind(launcher)
-    if kind == "SlurmLauncher":
-        cpus = launcher.get("cpus_per_task")
-        if cpus is not None and workers > int(cpus):
-            raise ConfigError(f"parallel.n_jobs={workers} is invalid: allowed <= "
-                              f"hydra.launcher.cpus_per_task={cpus} (the CPUs of one SLURM task)")
-        return
-    cores = os.cpu_count() or 1
-    allowed = max(1, cores // side_by_side)
-    if side_by_side > 1 and workers > allowed:
-        raise ConfigError(f"parallel.n_jobs={workers} is invalid: the launcher runs {side_by_side} jobs "
-                          f"side by side on {cores} cores; allowed <= {allowed} "
-                          f"(jobs x parallel.n_jobs <= cores)")
-
-
-class CheckedSweeper(BasicSweeper):
-    def __init__(self, max_batch_size: Optional[int], params: Optional[Dict[str, str]] = None) -> None:
-        # BasicSweeper.__init__ calls super(BasicSweeper, self), which fails once Hydra's plugin
-        # scan has re-executed its module (a new BasicSweeper class object); set its fields here
-        Sweeper.__init__(self)
-        self.overrides = None
-        self.batch_index = 0
+    def __init__(self, max_batch_size: Optional[int] = None, params: Optional[Dict[str, str]] = None) -> None:
+        super().__init__()
         self.max_batch_size = max_batch_size
-        self.params = params or {}
-        self.hydra_context = None
-        self.config = None
+        self.params = dict(params or {})
+        self.hydra_context: Optional[HydraContext] = None
+        self.config: Optional[DictConfig] = None
         self.launcher = None
 
-    def sweep(self, arguments: List[str]) -> Any:
+    def setup(self, *, hydra_context: HydraContext, task_function: TaskFunction, config: DictConfig) -> None:
+        self.hydra_context = hydra_context
+        self.config = config
+        self.launcher = Plugins.instance().instantiate_launcher(hydra_context=hydra_context,
+                                                               task_function=task_function, config=config)
+
+    def sweep(self, arguments: List[str]) -> List[Sequence[JobReturn]]:
         from pipeline.store.runs import LAUNCH_ENV, launch_id
 
         # one launch id and one literal sweep dir for every job, also for launchers
@@ -121,69 +88,83 @@ class CheckedSweeper(BasicSweeper):
         try:
             with open_dict(self.config):
                 self.config.hydra.sweep.dir = str(self.config.hydra.sweep.dir)
-            return self._sweep(arguments)
+            sweep_dir = Path(self.config.hydra.sweep.dir)
+            if sweep_dir.exists() and any(sweep_dir.iterdir()):
+                _fail(f"hydra.sweep.dir={str(sweep_dir)!r} is invalid: it already holds files; "
+                      f"allowed: a new directory (the default makes one per launch)")
+            try:
+                jobs = sweep_jobs(declared_overrides(self.params, arguments), self.hydra_context.config_loader)
+                planned = batches(jobs, self.max_batch_size)
+            except ConfigError as exc:
+                _fail(str(exc))
+            except (HydraException, OmegaConfBaseException) as exc:
+                _fail(str(exc).strip().splitlines()[0])
+            self.validate_batch_is_legal(jobs)  # all of them, before the first batch runs
+            sweep_dir.mkdir(parents=True, exist_ok=True)
+            OmegaConf.save(self.config, sweep_dir / "multirun.yaml")
+            returns: List[Sequence[JobReturn]] = []
+            first = 0
+            for batch in planned:
+                returns.append(self.launcher.launch(batch, initial_job_idx=first))
+                first += len(batch)
         finally:
             if previous is None:
                 os.environ.pop(LAUNCH_ENV, None)
             else:
                 os.environ[LAUNCH_ENV] = previous
-
-    def _sweep(self, arguments: List[str]) -> Any:
-        sweep_dir = Path(self.config.hydra.sweep.dir)
-        if sweep_dir.exists() and any(sweep_dir.iterdir()):
-            _fail(f"hydra.sweep.dir={str(sweep_dir)!r} is invalid: it already holds files; "
-                  f"allowed: a new directory (the default makes one per launch)")
-        created = not sweep_dir.exists()
-        try:
-            returns = super().sweep(arguments)
-        except SystemExit:
-            if created and sweep_dir.exists() and {p.name for p in sweep_dir.iterdir()} <= {"multirun.yaml"}:
-                shutil.rmtree(sweep_dir, ignore_errors=True)
-            raise
-        self._finish([r for batch in returns for r in batch], sweep_dir)
+        finish_sweep([r for batch in returns for r in batch], sweep_dir, Path(self.config.paths.dataset_dir))
         return returns
 
     def validate_batch_is_legal(self, batch: Sequence[Sequence[str]]) -> None:
+        """Compose and validate each job's config; the first bad one: one ``error:`` line, exit 2."""
         from pipeline.config import validate
 
         loader = self.hydra_context.config_loader
-        launcher = self.config.hydra.launcher
-        side_by_side = jobs_side_by_side(launcher, len(batch))
         for k, overrides in enumerate(batch):
-            label = f"job {k} ({' '.join(overrides)})"
             try:
-                cfg = loader.load_sweep_config(master_config=self.config, sweep_overrides=list(overrides))
-                typed = validate(cfg)
-                check_workers(launcher, side_by_side, typed.parallel.n_jobs)
+                validate(loader.load_sweep_config(master_config=self.config, sweep_overrides=list(overrides)))
             except ConfigError as exc:
-                _fail(f"{label}: {exc}")
+                _fail(f"{job_label(k, overrides)}: {exc}")
             except (HydraException, OmegaConfBaseException) as exc:
-                _fail(f"{label}: {str(exc).strip().splitlines()[0]}")
+                _fail(f"{job_label(k, overrides)}: {str(exc).strip().splitlines()[0]}")
 
-    def _finish(self, results: list, sweep_dir: Path) -> None:
-        from pipeline.stages.aggregate import aggregate
-        from pipeline.stages.plot import plot_tradeoff
-        from pipeline.report import write_report
 
-        failed = []
-        for k, r in enumerate(results):
-            status = r.return_value if isinstance(r.return_value, dict) else {}
-            if status.get("status") != "complete":
-                failed.append(f"job {k} ({' '.join(r.overrides)}): {status.get('reason', 'no result')}")
-        completed = len(results) - len(failed)
-        if completed:
-            dataset = Path(self.config.paths.dataset_dir)
-            try:
-                report = aggregate(sweep_dir, dataset)
-                if report.best is not None:
-                    plot_tradeoff(report.best, sweep_dir / "tradeoff.png")
-                write_report(sweep_dir)
-            except (ConfigError, RunError) as exc:
-                _fail(f"aggregation of {sweep_dir}: {exc}", 1)
-        summary = f"{completed} of {len(results)} jobs completed"
-        if failed:
-            _fail(f"{summary}; failed: {'; '.join(failed)}", 1)
-        log.info("%s; dataset %s", summary, self.config.paths.dataset_dir)
-        print(f"sweep: {sweep_dir}\nreport: {sweep_dir / 'report.html'}\n"
-              f"dataset: {self.config.paths.dataset_dir} "
-              f"(from pipeline.store import read_dataset; read_dataset({str(self.config.paths.dataset_dir)!r}))")
+def job_status(result: JobReturn) -> tuple[bool, str]:
+    """(completed, reason of the failure) of one job: its task's returned status, or the exception it raised."""
+    try:
+        value = result.return_value
+    except Exception as exc:  # noqa: BLE001 - a job's own failure, reported in the summary line
+        return False, f"{type(exc).__name__}: {exc}"
+    status = value if isinstance(value, dict) else {}
+    if status.get("status") == "complete":
+        return True, ""
+    return False, str(status.get("reason", "no result"))
+
+
+def finish_sweep(results: Sequence[JobReturn], sweep_dir: Path, dataset: Path) -> None:
+    """Aggregate the completed jobs into ``dataset``, write ``tradeoff.png`` and ``report.html``
+    into ``sweep_dir``, log the summary; one ``error:`` line and exit 1 if any job failed."""
+    from pipeline.report import write_report
+    from pipeline.stages.aggregate import aggregate
+    from pipeline.stages.plot import plot_tradeoff
+
+    failed = []
+    for k, result in enumerate(results):
+        completed, reason = job_status(result)
+        if not completed:
+            failed.append(f"{job_label(k, result.overrides)}: {reason}")
+    completed = len(results) - len(failed)
+    if completed:
+        try:
+            report = aggregate(sweep_dir, dataset)
+            if report.best is not None:
+                plot_tradeoff(report.best, sweep_dir / "tradeoff.png")
+            write_report(sweep_dir)
+        except (ConfigError, RunError) as exc:
+            _fail(f"aggregation of {sweep_dir}: {exc}", 1)
+    summary = f"{completed} of {len(results)} jobs completed"
+    if failed:
+        _fail(f"{summary}; failed: {'; '.join(failed)}", 1)
+    log.info("%s; dataset %s", summary, dataset)
+    print(f"sweep: {sweep_dir}\nreport: {sweep_dir / 'report.html'}\n"
+          f"dataset: {dataset} (from pipeline.store import read_dataset; read_dataset({str(dataset)!r}))")
