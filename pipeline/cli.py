@@ -31,7 +31,7 @@ from pipeline.commands import evaluate_command, one_line, print_help, subcommand
 from kinematics.plugins import PluginError
 from pipeline.config import CONFIG_DIR, guard, register_configs, validate
 from pipeline.errors import ConfigError, RunError, Terminated, check_writable, describe_fault
-from pipeline.evaluation import workers
+from pipeline.evaluation import pool
 from pipeline.stages.aggregate import aggregate
 from pipeline.store.runs import check_run_dir
 from pipeline.study import run_study
@@ -134,7 +134,7 @@ def remove_if_empty(path: Path, levels: int = 3) -> None:
 
 def shutdown_workers() -> None:
     """End the fitness workers and joblib's reusable ones (after Ctrl-C, so none outlives the run)."""
-    workers.shutdown_workers(kill=True)
+    pool.shutdown_pools(kill=True)
     try:
         from joblib.externals.loky import get_reusable_executor
 

@@ -368,19 +368,21 @@ def test_workers_never_see_ctrl_c(tmp_path):
     """
     script = tmp_path / "masks.py"
     script.write_text(
-        "import signal, numpy as np\n"
-        "from pipeline import evaluation as objective\nfrom pipeline.evaluation import workers\n"
+        "import os, signal, numpy as np\n"
+        "from pipeline import evaluation as objective\nfrom pipeline.evaluation.pool import worker_count\n"
         "from pipeline.config import MechanismConfig\n"
         "designs = np.array([[5.0, 6.0], [4.0, 7.0], [4.5, 6.5]])\n"
         "objective.DesignEvaluator(MechanismConfig(name='rpr2'), 40, 3).evaluate(designs)\n"
         "def blocked(pid):\n"
         "    line = next(ln for ln in open(f'/proc/{pid}/status') if ln.startswith('SigBlk:'))\n"
         "    return bool(int(line.split()[1], 16) >> (signal.SIGINT - 1) & 1)\n"
-        "pids = [pid for group in workers._GROUPS.values() for pid in group.pids]\n"
-        "print(len(pids), all(blocked(p) for p in pids), signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, []))\n")
+        "kids = open(f'/proc/{os.getpid()}/task/{os.getpid()}/children').read().split()\n"
+        "pids = [p for p in kids if 'LokyProcess' in open(f'/proc/{p}/cmdline').read()]\n"
+        "print(len(pids) == worker_count(3) - 1, all(blocked(p) for p in pids), "
+        "signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, []))\n")
     proc = subprocess.run([sys.executable, str(script)], cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.split() == ["2", "True", "False"]
+    assert proc.stdout.split() == ["True", "True", "False"]
 
 
 def test_ctrl_c_during_kernel_compilation_is_deferred_not_lost(tmp_path):
@@ -389,7 +391,7 @@ def test_ctrl_c_during_kernel_compilation_is_deferred_not_lost(tmp_path):
     script = tmp_path / "deferred.py"
     script.write_text(
         "import os, signal, time\n"
-        "from pipeline.evaluation.workers import sigint_deferred\n"
+        "from pipeline.evaluation.pool import sigint_deferred\n"
         "try:\n"
         "    with sigint_deferred():\n"
         "        os.kill(os.getpid(), signal.SIGINT)\n"
@@ -407,22 +409,23 @@ def test_ctrl_c_during_kernel_compilation_is_deferred_not_lost(tmp_path):
 def test_workers_of_a_killed_run_exit(tmp_path):
     """SIGKILL (the OOM killer) leaves the fitness workers orphaned: they must not live on.
 
-    A worker's connection to the killed process closes, and the worker exits.
+    Each worker watches its parent (pipeline.evaluation.pool.start_worker) and exits once orphaned.
     """
     script = tmp_path / "killed.py"
     script.write_text(
         "import os, numpy as np\n"
-        "from pipeline import evaluation as objective\nfrom pipeline.evaluation import workers\n"
+        "from pipeline import evaluation as objective\n"
         "from pipeline.config import MechanismConfig\n"
         "designs = np.array([[5.0, 6.0], [4.0, 7.0], [4.5, 6.5]])\n"
-        "objective.DesignEvaluator(MechanismConfig(name='rpr2'), 40, 3).evaluate(designs)\n"
-        "print(os.getpid(), *[pid for group in workers._GROUPS.values() for pid in group.pids], flush=True)\n"
+        "objective.DesignEvaluator(MechanismConfig(name='rpr2'), 40, 2).evaluate(designs)\n"
+        "kids = open(f'/proc/{os.getpid()}/task/{os.getpid()}/children').read().split()\n"
+        "print(os.getpid(), *[p for p in kids if 'LokyProcess' in open(f'/proc/{p}/cmdline').read()], flush=True)\n"
         "os.kill(os.getpid(), 9)\n")
     # the workers inherit the pipes, so wait for the process, not for the end of its output
     proc = subprocess.Popen([sys.executable, str(script)], cwd=ROOT, stdout=subprocess.PIPE,
                             stderr=subprocess.DEVNULL, text=True, start_new_session=True)
     session, *worker_pids = map(int, proc.stdout.readline().split())  # the killed process led its own session
-    assert len(worker_pids) == 2
+    assert len(worker_pids) == 1  # n_jobs=2: this process and one worker
     assert proc.wait(timeout=120) == -signal.SIGKILL
     deadline = time.time() + 30
     while _processes_in_session(session) and time.time() < deadline:

@@ -4,8 +4,9 @@
 options) whose :meth:`DesignEvaluator.evaluate` evaluates a population
 ``(P, n_design)`` in ``n_jobs`` chunks on the backend that
 ``joblib.parallel_config`` selects: loky by default (this process and
-``n_jobs - 1`` loky workers, :mod:`pipeline.evaluation.workers`), dask inside
-``parallel_config("dask")``.
+``n_jobs - 1`` loky workers, :mod:`pipeline.evaluation.pool`), dask inside
+``parallel_config("dask")``. ``n_jobs`` is capped at the cores the process may
+use (:func:`pipeline.evaluation.pool.worker_count`).
 Rows come back in input order, so results are the same whatever the number of workers.
 """
 
@@ -15,12 +16,11 @@ from dataclasses import dataclass
 
 import numpy as np
 from joblib import Parallel, delayed
-from joblib._parallel_backends import LokyBackend
-from joblib.parallel import get_active_backend
+from joblib.parallel import BACKENDS, get_active_backend
 
 from kinematics import resolve_mechanism
 from kinematics.workspace import evaluate
-from pipeline.evaluation import compile_ahead, workers
+from pipeline.evaluation.pool import fitness_pool, sigint_deferred, worker_count
 from pipeline.evaluation.scale import retry_lost_workers, workers_for
 from pipeline.objectives import EVALUATION_FIELDS
 
@@ -80,27 +80,35 @@ class DesignEvaluator:
         if designs.shape[0] == 0:
             return np.empty((0, len(EVALUATION_FIELDS)))
         spec = MechanismSpec.of(self.mechanism)
-        n_chunks = workers_for(self.n_jobs, designs.shape[0])
         backend, _ = get_active_backend()
-        # loky (the default): this process evaluates the first chunk, a worker group
-        # (pipeline.evaluation.workers) the others; joblib's Parallel polls for results every
-        # 10 ms, which cost 5-10 ms of every GA generation. Made before the
+        loky = isinstance(backend, BACKENDS["loky"])
+        n_workers = worker_count(self.n_jobs)  # capped at the usable cores, the cap logged
+        n_chunks = min(n_workers, workers_for(self.n_jobs, designs.shape[0]))
+        # loky (the default): this process evaluates the first chunk, a kept pool of loky
+        # workers (pipeline.evaluation.pool) the others; joblib's Parallel polls for results
+        # every 10 ms, which cost 5-10 ms of every GA generation. Made before the
         # compilation below, so that the workers' start-up (~1.5 s) overlaps it.
-        group = (workers.worker_group(n_chunks - 1, preload=(__name__,))
-                 if n_chunks > 1 and isinstance(backend, LokyBackend) and workers.AVAILABLE else None)
+        pool = fitness_pool(n_workers - 1, preload=(__name__,)) if n_chunks > 1 and loky else None
         _compile_kernels(spec, designs)
         if n_chunks == 1:
             return _evaluate_chunk(spec, self.resolution, designs)
         # contiguous equal chunks: no straggler beyond one design
         chunks = np.array_split(designs, n_chunks)
-        if group is not None:
-            parts = group.map(_evaluate_chunk, [(spec, self.resolution, c) for c in chunks[1:]],
-                              local=lambda: _evaluate_chunk(spec, self.resolution, chunks[0]))
+        if pool is not None:
+            parts = pool.map(_evaluate_chunk, [(spec, self.resolution, c) for c in chunks[1:]],
+                             local=lambda: _evaluate_chunk(spec, self.resolution, chunks[0]),
+                             timeout=CHUNK_TIMEOUT + SECONDS_PER_DESIGN * len(chunks[1]))
         else:  # dask, threading, multiprocessing: joblib's dispatch
             parts = retry_lost_workers(lambda: Parallel(n_jobs=n_chunks)(
                 delayed(_evaluate_chunk)(spec, self.resolution, c) for c in chunks))
         return np.vstack(parts)
 
+
+#: seconds the workers may take for their chunks once this process has evaluated its own,
+#: plus :data:`SECONDS_PER_DESIGN` per design of a chunk (a design takes ~1-100 ms): a
+#: hung worker fails the run instead of holding it for ever
+CHUNK_TIMEOUT = 300.0
+SECONDS_PER_DESIGN = 10.0
 
 #: mechanisms whose compiled kernels this process has already built or loaded
 _COMPILED: set[str] = set()
@@ -113,7 +121,7 @@ def _compile_kernels(spec: MechanismSpec, designs: np.ndarray) -> None:
     worker of the first batch on a new machine compiles the same kernels at
     the same time (~3 s each). After it, workers load them from the disk cache.
     A tiny grid (2 nodes per axis) of the first design that builds is enough.
-    A Ctrl-C during the compilation takes effect once it is done (:func:`pipeline.evaluation.workers.sigint_deferred`).
+    A Ctrl-C during the compilation takes effect once it is done (:func:`pipeline.evaluation.pool.sigint_deferred`).
     """
     if spec.name in _COMPILED:
         return
@@ -122,8 +130,7 @@ def _compile_kernels(spec: MechanismSpec, designs: np.ndarray) -> None:
             mech = spec.build(design)
         except ValueError:
             continue
-        compile_ahead.wait_for(spec.name)  # compiled by the entry point's helper, if it runs
-        with workers.sigint_deferred():
+        with sigint_deferred():
             evaluate(mech, **dict(spec.options, resolution=2, error_estimate=False))
         _COMPILED.add(spec.name)
         return
