@@ -48,7 +48,7 @@ def test_the_private_import_check_catches_what_it_should():
 
 #: files that still use private internals, until the sweeper and the evaluator move to public APIs (issue 22);
 #: strict: each entry fails the suite as soon as its file is clean, so the list can only shrink
-STILL_PRIVATE = {"pipeline/reproduction/driver.py"}
+STILL_PRIVATE: set[str] = set()
 
 
 @pytest.mark.parametrize("path", [pytest.param(p, marks=pytest.mark.xfail(strict=True, reason="private API, issue 22"))

@@ -3,7 +3,7 @@
 Each paper table or figure is an experiment (``conf/experiment/*.yaml``)
 that declares its own sweep in ``hydra.sweeper.params``, the same sweep
 ``python -m pipeline -m +experiment=NAME`` runs. :meth:`Reproduction.experiment`
-expands that sweep the way Hydra's basic sweeper does, runs the jobs through
+expands that sweep with the sweeper's own expansion (:func:`pipeline.sweeps.jobs.sweep_jobs`), runs the jobs through
 the cached pipeline (two side by side, one fitness worker each), aggregates
 them into the document's dataset and returns their ``best`` rows read back
 with ``pd.read_parquet`` from that dataset. The sections (one module per
@@ -22,7 +22,6 @@ from pathlib import Path
 
 import pandas as pd
 from hydra import compose, initialize_config_dir
-from hydra._internal.core_plugins.basic_sweeper import BasicSweeper
 from hydra.core.override_parser.overrides_parser import OverridesParser
 from joblib import Parallel, delayed
 from omegaconf import DictConfig, OmegaConf, open_dict
@@ -32,6 +31,7 @@ from pipeline.store.cache import cached
 from pipeline.config import CONFIG_DIR, register_configs
 from pipeline.store.runs import launch_id, read_manifest
 from pipeline.study import run_study
+from pipeline.sweeps import jobs as sweeps
 
 #: studies run side by side (each with one fitness worker): the machine's 2 cores
 STUDY_JOBS = 2
@@ -89,13 +89,12 @@ def _run_counted(base: DictConfig, values: list[str], run_dir: Path, job: int, o
 
 
 def sweep_jobs(params: dict[str, str]) -> list[list[str]]:
-    """The jobs of a declared sweep (``hydra.sweeper.params``), as Hydra's basic sweeper orders them.
+    """The jobs of a declared sweep (``hydra.sweeper.params``), as ``python -m pipeline -m`` runs them.
 
     ``{"objective.w_d": "0.25,0.5", "optimizer.seed": "0,1"}`` gives
     ``[["objective.w_d=0.25", "optimizer.seed=0"], ...]`` (4 jobs); no params: one job, no overrides.
     """
-    parsed = OverridesParser.create().parse_overrides([f"{key}={value}" for key, value in params.items()])
-    return [list(job) for batch in BasicSweeper.split_arguments(parsed, None) for job in batch] or [[]]
+    return sweeps.sweep_jobs(sweeps.declared_overrides(params, []))
 
 
 class Reproduction:
