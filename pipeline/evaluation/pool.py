@@ -14,9 +14,9 @@ on ``n + 1`` cores.
   (``BrokenProcessPool``); the pool is then dropped and the next batch starts
   a new one. The workers of a process killed by SIGKILL end within
   :data:`PARENT_POLL` seconds (:func:`start_worker`).
-* Ctrl-C: workers are started, and restarted, with SIGINT blocked (the
-  manager thread that may restart them inherits the mask too); the main
-  process alone handles it and kills them (:func:`shutdown_pools`).
+* Ctrl-C: workers are started with SIGINT blocked (as is loky's manager
+  thread, which starts any later worker); the main process alone handles it
+  and kills them (:func:`shutdown_pools`).
 """
 
 from __future__ import annotations
@@ -173,8 +173,9 @@ class FitnessPool:
             raise BrokenProcessPool("the fitness pool is closed")
         local_error: Exception | None = None
         try:
-            with sigint_blocked():  # a worker restarted by loky's manager thread inherits its mask
-                futures = [self._executor.submit(func, *args) for args in argument_tuples]
+            # (no mask needed here: loky's manager thread, which starts any new worker, was
+            # started under the mask by the constructor's submit and keeps it)
+            futures = [self._executor.submit(func, *args) for args in argument_tuples]
             try:
                 mine = local()
             except Exception as exc:  # noqa: BLE001 - raised below, once the workers' results are in
