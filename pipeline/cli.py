@@ -67,10 +67,9 @@ def precheck_overrides(argv: list[str]) -> None:
                               f"allowed flags: {', '.join(MULTIRUN_FLAGS + INFO_FLAGS)}")
         overrides = [a for a in argv if not a.startswith("-")]
         if flags:
+            # each job's values are validated by the sweeper, which names the job
             for job_overrides in _probe_jobs(overrides):
-                cfg = _compose(job_overrides)
-                guard.check_hydra_node(cfg.hydra)
-                validate(cfg)
+                guard.check_hydra_node(_compose(job_overrides).hydra)
             return
         _probe_jobs(overrides)  # the keys' check
         cfg = _compose(overrides)

@@ -107,8 +107,6 @@ def precheck(argv: list[str], capsys) -> tuple[int, str]:
     (["mechanism=tricept", "mechanism.fixed.tilt_limit=0"], "mechanism.fixed.tilt_limit=0 is invalid: allowed null or"),
     (["mechanism=delta", "mechanism.fixed.z_max=1"], "mechanism.fixed.z_max=1 is invalid"),
     (["-m", "objective.w_d=abc"], "objective.w_d"),
-    (["-m", "mechanism.fixed.stroke=1e300,10"], "mechanism.fixed.stroke=1e+300 is invalid"),
-    (["-m", "objective.w_d=0,1", "mechanism.fixed.stroke=10,1e-300"], "mechanism.fixed.stroke=1e-300 is invalid"),
     (["+hydra.callbacks.x._target_=shutil.copyfile"], "hydra.callbacks.x._target_ is refused"),
     (["-m", "+hydra.callbacks.x._target_=builtins.open"], "hydra.callbacks.x._target_ is refused"),
     (["+hydra.job.env_set.PYTHONPATH=/tmp"], "hydra.job.env_set.PYTHONPATH is refused"),
