@@ -139,20 +139,13 @@ def run_cli(args: list[str], out: Path, env: dict[str, str] | None = None) -> fl
 
 
 def main_job_times(scratch: Path) -> dict[str, float]:
-    """The main job cold (empty caches: stages and numba) and warm, each in a fresh process.
-
-    Cold twice, side by side: as shipped (the entry point compiles the kernels ahead in a second
-    process, :mod:`pipeline.evaluation.compile_ahead`) and with that helper off (``PM_DESIGN_COMPILE_AHEAD=0``).
-    """
-    times = {}
-    for label, ahead in (("cold_without_helper", "0"), ("cold", "1")):
-        env = {"NUMBA_CACHE_DIR": str(scratch / f"numba-cache-{label}"), "PM_DESIGN_COMPILE_AHEAD": ahead}
-        out = scratch / f"main-{label}"
-        times[label] = run_cli(["+experiment=h4_mixed"], out, env)
-        if label == "cold":
-            times["compiled"] = run_cli(["+experiment=h4_mixed"], scratch / "main-compiled", env)
-            times["warm"] = run_cli(["+experiment=h4_mixed"], out, env)
-    return times
+    """The main job cold (empty caches: stages and numba), with the kernels compiled, and warm,
+    each in a fresh process."""
+    env = {"NUMBA_CACHE_DIR": str(scratch / "numba-cache")}
+    out = scratch / "main-cold"
+    return {"cold": run_cli(["+experiment=h4_mixed"], out, env),
+            "compiled": run_cli(["+experiment=h4_mixed"], scratch / "main-compiled", env),
+            "warm": run_cli(["+experiment=h4_mixed"], out, env)}
 
 
 def preset_against_paper_ga(scratch: Path) -> list[list[str]]:
@@ -224,8 +217,7 @@ def main() -> None:
             main_job = main_job_times(scratch)
             sections.append(f"## 4. The main job, `python -m pipeline +experiment=h4_mixed`, fresh process\n\n"
                             f"cold (empty stage cache, empty numba cache: imports and compilation count) "
-                            f"{main_job['cold']:.1f} s (goal <= 12 s; {main_job['cold_without_helper']:.1f} s "
-                            f"without the compile-ahead helper, `PM_DESIGN_COMPILE_AHEAD=0`); empty stage cache "
+                            f"{main_job['cold']:.1f} s (goal <= 12 s); empty stage cache "
                             f"with the kernels compiled {main_job['compiled']:.1f} s; warm {main_job['warm']:.1f} s "
                             f"(goal <= 3 s)")
             sections.append("## 4b. The fast preset against the paper GA, seconds (empty stage cache)\n\n"
