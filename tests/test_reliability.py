@@ -22,6 +22,7 @@ from pathlib import Path
 
 import joblib
 import numpy as np
+from joblib import parallel_config
 import pandas as pd
 import pytest
 from hydra import compose, initialize_config_dir
@@ -479,7 +480,7 @@ def test_item14_a_batch_lost_with_a_dask_worker_is_retried_while_workers_remain(
     from pipeline.evaluation import DesignEvaluator
     from pipeline.evaluation.scale import retry_lost_workers
 
-    monkeypatch.setattr("pipeline.evaluation.scale.usable_cores", lambda: 4)
+    monkeypatch.setattr("pipeline.evaluation.pool.cpu_count", lambda: 4)
     c = compose_cfg("+experiment=rpr2_mixed", *TINY)
     from pipeline.config import validate
 
@@ -501,8 +502,7 @@ def test_item14_a_batch_lost_with_a_dask_worker_is_retried_while_workers_remain(
 
     monkeypatch.setattr(evaluator, "Parallel", LosesAWorkerOnce)
     monkeypatch.setattr("pipeline.evaluation.scale.dask_workers_left", lambda: 1)
-    monkeypatch.setattr(evaluator.workers, "AVAILABLE", False)  # joblib's dispatch, as on dask
-    with caplog.at_level("WARNING"):
+    with caplog.at_level("WARNING"), parallel_config(backend="threading"):  # joblib's dispatch, as on dask
         rows = DesignEvaluator(mech, 8, 4).evaluate(designs)
     np.testing.assert_array_equal(rows, expected)
     assert len(calls) == 2 and [r for r in caplog.records if "worker was lost" in r.getMessage()]
@@ -514,26 +514,31 @@ def test_item14_a_batch_lost_with_a_dask_worker_is_retried_while_workers_remain(
 
 
 def test_item15_n_jobs_is_capped_by_cores_and_batch(monkeypatch):
-    from pipeline.evaluation.scale import usable_cores, workers_for
-
-    assert workers_for(16, 4) == min(4, usable_cores())
-    assert workers_for(1000, 10_000) == usable_cores()
-    assert workers_for(2, 1) == 1
     import pipeline.evaluation.evaluator as evaluator
-
-    sizes = []
-    monkeypatch.setattr(evaluator.workers, "worker_group", lambda n, preload=(): sizes.append(n) or None)
-    monkeypatch.setattr(evaluator.workers, "AVAILABLE", True)
-    monkeypatch.setattr("pipeline.evaluation.scale.usable_cores", lambda: 64)
     from pipeline.config import validate
     from pipeline.evaluation import DesignEvaluator
+    from pipeline.evaluation.pool import worker_count
+    from pipeline.evaluation.scale import workers_for
 
+    assert workers_for(16, 4) == min(4, worker_count(16))
+    assert workers_for(1000, 10_000) == worker_count(1000) <= (os.cpu_count() or 1)
+    assert workers_for(2, 1) == 1
+
+    class Started(Exception):
+        """Stops the evaluation once the pool's size is known."""
+
+    sizes = []
+
+    def pool_of(n, preload=()):
+        sizes.append(n)
+        raise Started
+
+    monkeypatch.setattr(evaluator, "fitness_pool", pool_of)
+    monkeypatch.setattr("pipeline.evaluation.pool.cpu_count", lambda: 64)
     mech = validate(compose_cfg("+experiment=rpr2_mixed", *TINY)).mechanism
     designs = np.array([[5.0, 6.0], [4.0, 5.0], [6.0, 7.0], [3.0, 4.0]])
-    try:
+    with pytest.raises(Started):
         DesignEvaluator(mech, 8, 16).evaluate(designs)
-    except AttributeError:  # the stand-in group has no map: only its size matters here
-        pass
     assert sizes == [3]  # 4 designs: this process and 3 workers, not 15
 
 

@@ -20,7 +20,7 @@ from joblib.parallel import BACKENDS, get_active_backend
 
 from kinematics import resolve_mechanism
 from kinematics.workspace import evaluate
-from pipeline.evaluation.pool import fitness_pool, sigint_deferred, worker_count
+from pipeline.evaluation.pool import fitness_pool, sigint_deferred
 from pipeline.evaluation.scale import retry_lost_workers, workers_for
 from pipeline.objectives import EVALUATION_FIELDS
 
@@ -82,13 +82,12 @@ class DesignEvaluator:
         spec = MechanismSpec.of(self.mechanism)
         backend, _ = get_active_backend()
         loky = isinstance(backend, BACKENDS["loky"])
-        n_workers = worker_count(self.n_jobs)  # capped at the usable cores, the cap logged
-        n_chunks = min(n_workers, workers_for(self.n_jobs, designs.shape[0]))
+        n_chunks = workers_for(self.n_jobs, designs.shape[0])  # capped by the usable cores (logged) and the batch
         # loky (the default): this process evaluates the first chunk, a kept pool of loky
         # workers (pipeline.evaluation.pool) the others; joblib's Parallel polls for results
         # every 10 ms, which cost 5-10 ms of every GA generation. Made before the
         # compilation below, so that the workers' start-up (~1.5 s) overlaps it.
-        pool = fitness_pool(n_workers - 1, preload=(__name__,)) if n_chunks > 1 and loky else None
+        pool = fitness_pool(n_chunks - 1, preload=(__name__,)) if n_chunks > 1 and loky else None
         _compile_kernels(spec, designs)
         if n_chunks == 1:
             return _evaluate_chunk(spec, self.resolution, designs)

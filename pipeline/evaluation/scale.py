@@ -1,8 +1,9 @@
 """How many workers a batch gets, and retrying a batch whose dask worker was lost.
 
-* :func:`usable_cores`, :func:`workers_for`: ``parallel.n_jobs`` is capped by
-  the cores this process may use and by the batch size, for single runs as for
-  sweeps (``n_jobs=1000`` once started 243 processes for 4 designs);
+* :func:`workers_for`: ``parallel.n_jobs`` is capped by the cores this process
+  may use (:func:`pipeline.evaluation.pool.worker_count`) and by the batch size,
+  for single runs as for sweeps (``n_jobs=1000`` once started 243 processes for
+  4 designs);
 * :func:`retry_lost_workers`: on dask, a batch that fails because a worker
   died (``FutureCancelledError``, ``KilledWorker``, a lost connection) is sent
   again while the cluster still has workers; the run fails only when none
@@ -13,10 +14,11 @@
 from __future__ import annotations
 
 import logging
-import os
 from collections.abc import Callable
 from concurrent.futures import CancelledError
 from typing import TypeVar
+
+from pipeline.evaluation.pool import worker_count
 
 log = logging.getLogger(__name__)
 
@@ -26,17 +28,9 @@ T = TypeVar("T")
 MAX_RETRIES = 3
 
 
-def usable_cores() -> int:
-    """Cores this process may run on (its CPU affinity; ``os.cpu_count()`` where unknown)."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # not on Linux
-        return max(1, os.cpu_count() or 1)
-
-
 def workers_for(n_jobs: int, batch: int) -> int:
     """Parallel chunks of a batch of ``batch`` designs: ``n_jobs`` capped by the cores and the batch."""
-    return max(1, min(int(n_jobs), usable_cores(), int(batch)))
+    return max(1, min(worker_count(int(n_jobs)), int(batch)))
 
 
 def lost_worker(exc: BaseException) -> bool:
