@@ -6,8 +6,8 @@ any folder, so the build copies them into the package. An editable install
 reads ``conf/`` in place (``pipeline.config.registry.CONFIG_DIR``).
 """
 
-from pathlib import Path
 import shutil
+from pathlib import Path
 
 from setuptools import setup
 from setuptools.command.build_py import build_py

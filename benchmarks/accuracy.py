@@ -40,8 +40,7 @@ FIGURE = DOCS / "figures" / "accuracy_convergence.png"
 PAPER = {
     "h4": dict(d=6.0, h=6.0, Qz=42.0),
     "tricept": dict(a=250.0, b=400.0, d=100.0),
-    "rpr3": dict(base=[[0, 0], [200, 0], [0, 200]], platform=[[0, 0], [50, 0], [40, 40]],
-                 rho_min=80.0, rho_max=160.0),
+    "rpr3": dict(base=[[0, 0], [200, 0], [0, 200]], platform=[[0, 0], [50, 0], [40, 40]], rho_min=80.0, rho_max=160.0),
     "rpr2": dict(b=5.0, q_min=6.0, q_max=9.6),
     "delta": dict(R=200.0, r=50.0, la=200.0, lb=400.0),
 }
@@ -189,44 +188,70 @@ def study(name: str) -> dict:
                 best[method] = math.inf
             for _ in range(REPEATS):  # old and new alternately: the machine's load hits both alike
                 for method in errors:
-                    best[method] = min(best[method], best_time(
-                        lambda m=mech, r=res, k=method: evaluate(m, resolution=r, method=k, error_estimate=False),
-                        1))
+                    best[method] = min(
+                        best[method],
+                        best_time(
+                            lambda m=mech, r=res, k=method: evaluate(m, resolution=r, method=k, error_estimate=False), 1
+                        ),
+                    )
             for method in errors:
                 seconds[method].append(best[method])
         for method in errors:
             err = np.max(errors[method], axis=0)
-            rows.append(dict(method=method, factor=factor, resolution=res, seconds=float(np.mean(seconds[method])),
-                             v=err[0], gdi=err[1], eta=err[2]))
+            rows.append(
+                dict(
+                    method=method,
+                    factor=factor,
+                    resolution=res,
+                    seconds=float(np.mean(seconds[method])),
+                    v=err[0],
+                    gdi=err[1],
+                    eta=err[2],
+                )
+            )
     rows.sort(key=lambda row: (row["method"] != "midpoint", row["factor"]))
     # error bars: the evaluation's own estimate (shifted grid) against the true error, default resolution
     calibration = []
     for (label, mech), ref in zip(cases, refs):
         ev = evaluate(mech)
-        calibration.append((label, abs(ev.volume / ref[0] - 1), ev.volume_error / ref[0],
-                            abs(ev.gdi / ref[1] - 1), ev.gdi_error / ref[1]))
-    return dict(name=name, r0=r0, cases=[c[0] for c in cases], rows=rows,
-                cross=np.max(cross, axis=0), calibration=calibration)
+        calibration.append(
+            (
+                label,
+                abs(ev.volume / ref[0] - 1),
+                ev.volume_error / ref[0],
+                abs(ev.gdi / ref[1] - 1),
+                ev.gdi_error / ref[1],
+            )
+        )
+    return dict(
+        name=name, r0=r0, cases=[c[0] for c in cases], rows=rows, cross=np.max(cross, axis=0), calibration=calibration
+    )
 
 
 def table(results: list[dict]) -> str:
-    lines = ["| mechanism | method | resolution | ms / evaluation | cost vs old default | max error V | GDI | eta |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    lines = [
+        "| mechanism | method | resolution | ms / evaluation | cost vs old default | max error V | GDI | eta |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- |",
+    ]
     for r in results:
         base = next(row["seconds"] for row in r["rows"] if row["method"] == "midpoint" and row["factor"] == 1.0)
         for row in r["rows"]:
             mark = " (default)" if row["factor"] == 1.0 else ""
-            lines.append(f"| {r['name']} | {'old' if row['method'] == 'midpoint' else 'new'} | "
-                         f"{row['resolution']}{mark} | {1e3 * row['seconds']:.1f} | {row['seconds'] / base:.2f} | "
-                         f"{100 * row['v']:.3f} % | {100 * row['gdi']:.3f} % | {100 * row['eta']:.3f} % |")
+            lines.append(
+                f"| {r['name']} | {'old' if row['method'] == 'midpoint' else 'new'} | "
+                f"{row['resolution']}{mark} | {1e3 * row['seconds']:.1f} | {row['seconds'] / base:.2f} | "
+                f"{100 * row['v']:.3f} % | {100 * row['gdi']:.3f} % | {100 * row['eta']:.3f} % |"
+            )
     return "\n".join(lines)
 
 
 def figure(results: list[dict]) -> None:
     fig, axes = plt.subplots(1, len(results), figsize=(4 * len(results), 3.6), sharey=True)
     for ax, r in zip(axes, results):
-        for method, style, label in (("midpoint", "o--", "old: cell-centre count"),
-                                     ("grid", "s-", "new: boundary fractions")):
+        for method, style, label in (
+            ("midpoint", "o--", "old: cell-centre count"),
+            ("grid", "s-", "new: boundary fractions"),
+        ):
             rows = [row for row in r["rows"] if row["method"] == method]
             cost = [1e3 * row["seconds"] for row in rows]
             err = [100 * max(row["v"], row["gdi"], row["eta"], 1e-6) for row in rows]
@@ -250,32 +275,48 @@ def main() -> None:
     for name in sorted(MECHANISMS):
         r = study(name)
         results.append(r)
-        print(f"{name}: designs {', '.join(r['cases'])}; reference {REFERENCE_FACTOR}x default, "
-              f"old vs new there: V {100 * r['cross'][0]:.3f} %, GDI {100 * r['cross'][1]:.3f} %", flush=True)
+        print(
+            f"{name}: designs {', '.join(r['cases'])}; reference {REFERENCE_FACTOR}x default, "
+            f"old vs new there: V {100 * r['cross'][0]:.3f} %, GDI {100 * r['cross'][1]:.3f} %",
+            flush=True,
+        )
     text = table(results)
     print(text)
-    calib = ["| mechanism | design | true V error | estimate | true GDI error | estimate |",
-             "| --- | --- | --- | --- | --- | --- |"]
+    calib = [
+        "| mechanism | design | true V error | estimate | true GDI error | estimate |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
     for r in results:
         for label, tv, ev, tg, eg in r["calibration"]:
-            calib.append(f"| {r['name']} | {label} | {100 * tv:.3f} % | {100 * ev:.3f} % | "
-                         f"{100 * tg:.3f} % | {100 * eg:.3f} % |")
+            calib.append(
+                f"| {r['name']} | {label} | {100 * tv:.3f} % | {100 * ev:.3f} % | {100 * tg:.3f} % | {100 * eg:.3f} % |"
+            )
     print("\n".join(calib))
     figure(results)
-    cross = "\n".join(f"* {r['name']}: V {100 * r['cross'][0]:.3f} %, GDI {100 * r['cross'][1]:.3f} % "
-                      f"(designs: {', '.join(r['cases'])})" for r in results)
+    cross = "\n".join(
+        f"* {r['name']}: V {100 * r['cross'][0]:.3f} %, GDI {100 * r['cross'][1]:.3f} % "
+        f"(designs: {', '.join(r['cases'])})"
+        for r in results
+    )
     write_page(
-        text + "\n\nOld vs new method at the reference resolution (largest difference over the designs):\n\n"
-        + cross + "\n\nError bars at the default resolution (`Evaluation.volume_error`, `gdi_error`) against "
-        "the true error (vs the reference):\n\n" + "\n".join(calib) + "\n")
+        text
+        + "\n\nOld vs new method at the reference resolution (largest difference over the designs):\n\n"
+        + cross
+        + "\n\nError bars at the default resolution (`Evaluation.volume_error`, `gdi_error`) against "
+        "the true error (vs the reference):\n\n" + "\n".join(calib) + "\n"
+    )
 
 
 def write_page(measured: str) -> None:
     """docs/accuracy.md: the method (:data:`METHOD`) and the measured tables."""
     (DOCS / "accuracy.md").write_text(
         "<!-- generated by python -m benchmarks.accuracy; edit METHOD there, not this file -->\n\n"
-        + METHOD + "\n## Measured (" + time.strftime("%Y-%m-%d") + ", one core of the 2-core machine)\n\n"
-        + measured)
+        + METHOD
+        + "\n## Measured ("
+        + time.strftime("%Y-%m-%d")
+        + ", one core of the 2-core machine)\n\n"
+        + measured
+    )
 
 
 if __name__ == "__main__":

@@ -19,7 +19,7 @@ import argparse
 import hashlib
 import json
 import time
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
@@ -61,8 +61,9 @@ def make_problem(name: str, n_jobs: int = 2, resolution: int | None = None) -> P
     mechanism, objective, w_d = PROBLEMS[name]
     config = MechanismConfig(name=mechanism)
     evaluator = DesignEvaluator(config, resolution, n_jobs)
-    return Problem(lambda x: objective_values(objective, evaluator.evaluate(x), w_d),
-                   config.design.lower, config.design.upper)
+    return Problem(
+        lambda x: objective_values(objective, evaluator.evaluate(x), w_d), config.design.lower, config.design.upper
+    )
 
 
 def default_resolution_of(name: str, x: np.ndarray) -> int:
@@ -79,16 +80,26 @@ def compute(name: str) -> dict:
     refined = float(make_problem(name, 1, resolution * REFINE_FACTOR)(found.x[None])[0])
     config = MechanismConfig(name=PROBLEMS[name][0])
     return {
-        "mechanism": PROBLEMS[name][0], "objective": PROBLEMS[name][1], "w_d": PROBLEMS[name][2],
-        "value": found.fun, "design": dict(zip(config.design.names, map(float, found.x))),
-        "found_by": found.found_by, "agreeing": found.agreeing,
-        "searches": [{"method": s.method, "value": s.value, "n_evaluations": s.n_evaluations,
-                      "design": [float(v) for v in s.x]} for s in found.searches],
-        "n_evaluations": found.n_evaluations, "resolution": resolution,
-        "value_refined": refined, "refine_factor": REFINE_FACTOR, "error": abs(refined - found.fun),
+        "mechanism": PROBLEMS[name][0],
+        "objective": PROBLEMS[name][1],
+        "w_d": PROBLEMS[name][2],
+        "value": found.fun,
+        "design": dict(zip(config.design.names, map(float, found.x))),
+        "found_by": found.found_by,
+        "agreeing": found.agreeing,
+        "searches": [
+            {"method": s.method, "value": s.value, "n_evaluations": s.n_evaluations, "design": [float(v) for v in s.x]}
+            for s in found.searches
+        ],
+        "n_evaluations": found.n_evaluations,
+        "resolution": resolution,
+        "value_refined": refined,
+        "refine_factor": REFINE_FACTOR,
+        "error": abs(refined - found.fun),
         "relative_error": abs(refined - found.fun) / abs(found.fun),
-        "code_version": CODE_VERSION, "objective_digest": objective_digest(),
-        "computed": datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+        "code_version": CODE_VERSION,
+        "objective_digest": objective_digest(),
+        "computed": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
         "wall_time_s": round(time.perf_counter() - start, 1),
     }
 
@@ -112,8 +123,10 @@ def load(check: list[str] | None = None) -> dict:
         if abs(value - records[name]["value"]) > 1e-9 * abs(records[name]["value"]):
             stale.append(f"{name} ({records[name]['value']:.8g} recorded, {value:.8g} now)")
     if stale:
-        raise SystemExit(f"benchmarks/best_known.json is stale for {', '.join(stale)} (the objective "
-                         f"changed): regenerate with python -m benchmarks.best_known")
+        raise SystemExit(
+            f"benchmarks/best_known.json is stale for {', '.join(stale)} (the objective "
+            f"changed): regenerate with python -m benchmarks.best_known"
+        )
     return records
 
 
@@ -123,16 +136,20 @@ def save(records: dict) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--problem", choices=sorted(PROBLEMS), action="append",
-                        help="recompute only these (default: all)")
+    parser.add_argument(
+        "--problem", choices=sorted(PROBLEMS), action="append", help="recompute only these (default: all)"
+    )
     args = parser.parse_args()
     records = load() if GOLDEN.exists() else {}
     for name in args.problem or PROBLEMS:
         records[name] = compute(name)
         r = records[name]
-        print(f"{name}: {r['value']:.8g} at {r['design']} by {r['found_by']} ({r['agreeing']} of "
-              f"{len(r['searches'])} searches agree within 0.1 %), error {100 * r['relative_error']:.3g} %, "
-              f"{r['n_evaluations']} evaluations, {r['wall_time_s']} s", flush=True)
+        print(
+            f"{name}: {r['value']:.8g} at {r['design']} by {r['found_by']} ({r['agreeing']} of "
+            f"{len(r['searches'])} searches agree within 0.1 %), error {100 * r['relative_error']:.3g} %, "
+            f"{r['n_evaluations']} evaluations, {r['wall_time_s']} s",
+            flush=True,
+        )
         save(records)
 
 

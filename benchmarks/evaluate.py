@@ -61,8 +61,7 @@ def naive_evaluation(mech, resolution: int, orientation, min_ic: float = 0.01):
 
 def conditioned_count(mech, resolution: int, orientation) -> int:
     """Nodes whose z-interval is non-empty: the poses that get a condition number."""
-    ev = evaluate(mech, resolution=resolution, orientation=orientation, error_estimate=False,
-                  return_samples=True)
+    ev = evaluate(mech, resolution=resolution, orientation=orientation, error_estimate=False, return_samples=True)
     return int(np.isfinite(ev.inverse_conditions).sum())
 
 
@@ -77,8 +76,12 @@ def best_time(func, repeats: int) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--naive-resolution", type=int, default=None,
-                        help="resolution of the side-by-side naive comparison (default: the default resolution)")
+    parser.add_argument(
+        "--naive-resolution",
+        type=int,
+        default=None,
+        help="resolution of the side-by-side naive comparison (default: the default resolution)",
+    )
     args = parser.parse_args()
     mech = get_mechanism("h4", **TABLE1)
     orient = mech.default_orientation
@@ -100,16 +103,22 @@ def main() -> None:
     print(f"   V error   {100 * (ev.volume - ref.volume) / ref.volume:+.3f} %  (goal: within 1 %)")
     print(f"   GDI error {100 * (ev.gdi - ref.gdi) / ref.gdi:+.3f} %")
     est = evaluate(mech, resolution=res)
-    print(f"   reported error estimate (vs the grid shifted by half a cell): V +-{est.volume_error:.1f}, GDI +-{est.gdi_error:.4f}")
+    print(
+        f"   reported error estimate (vs the grid shifted by half a cell): V +-{est.volume_error:.1f}, GDI +-{est.gdi_error:.4f}"
+    )
 
     seconds = best_time(lambda: evaluate(mech, resolution=res, error_estimate=False), 7)
     cond = conditioned_count(mech, res, orient)
     print(f"\n3. one evaluation at resolution {res}: {1e3 * seconds:.1f} ms (one core)")
     print(f"   sampled poses/s/core:     {ev.n_samples / seconds:>12,.0f}")
-    print(f"   conditioned poses/s/core: {cond / seconds:>12,.0f}  ({cond} of {ev.n_samples} (x, y, theta)"
-          f" nodes conditioned; goal 3,000,000)")
-    print(f"   equivalent 4-D grid poses/s/core: {res * ev.n_samples / seconds:>12,.0f}  (z is integrated"
-          f" exactly; a plain grid would sample {res} z values per node)")
+    print(
+        f"   conditioned poses/s/core: {cond / seconds:>12,.0f}  ({cond} of {ev.n_samples} (x, y, theta)"
+        f" nodes conditioned; goal 3,000,000)"
+    )
+    print(
+        f"   equivalent 4-D grid poses/s/core: {res * ev.n_samples / seconds:>12,.0f}  (z is integrated"
+        f" exactly; a plain grid would sample {res} z values per node)"
+    )
 
     r = args.naive_resolution or res
     fast = best_time(lambda: evaluate(mech, resolution=r, error_estimate=False), 5)
@@ -118,8 +127,10 @@ def main() -> None:
     slow = time.perf_counter() - t0
     ev_r = evaluate(mech, resolution=r, error_estimate=False)
     print(f"\n4. side by side at resolution {r} ({ev_r.n_samples} poses):")
-    print(f"   vectorised {1e3 * fast:.2f} ms, naive loop with numpy.linalg.cond {1e3 * slow:.1f} ms:"
-          f" ratio {slow / fast:.0f}x (goal >= 100x)")
+    print(
+        f"   vectorised {1e3 * fast:.2f} ms, naive loop with numpy.linalg.cond {1e3 * slow:.1f} ms:"
+        f" ratio {slow / fast:.0f}x (goal >= 100x)"
+    )
     print(f"   same result: V {ev_r.volume:.3f} vs {v_naive:.3f}, GDI {ev_r.gdi:.6f} vs {gdi_naive:.6f}")
 
     print(f"\n5. projected GA run, 4,500 evaluations on 2 workers: {4500 * seconds / 2:.0f} s (goal <= 60 s)")

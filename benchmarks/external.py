@@ -56,8 +56,10 @@ def main() -> None:
     rpr2 = get_mechanism("rpr2", b=5.0, q_min=6.0, q_max=9.6)
 
     print(f"1. one evaluation (ms of CPU time), one core, best of {REPEATS}; ns per grid node in brackets")
-    print(f"{'resolution':>10} {'nodes':>8} | {'five-bar numpy':>18} | {'2-RPR compiled':>18} | "
-          f"{'2-RPR numpy':>18} | five-bar/2-RPR compiled | five-bar/2-RPR numpy")
+    print(
+        f"{'resolution':>10} {'nodes':>8} | {'five-bar numpy':>18} | {'2-RPR compiled':>18} | "
+        f"{'2-RPR numpy':>18} | five-bar/2-RPR compiled | five-bar/2-RPR numpy"
+    )
     for res in RESOLUTIONS:
         nodes = res * res
 
@@ -70,8 +72,10 @@ def main() -> None:
         with kernels.reference_kernels():
             numpy_ref = timed(rpr2)
         cells = [f"{1e3 * t:8.2f} ({1e9 * t / nodes:5.1f})" for t in (five, compiled, numpy_ref)]
-        print(f"{res:>10} {nodes:>8,} | {cells[0]:>18} | {cells[1]:>18} | {cells[2]:>18} | "
-              f"{five / compiled:22.1f}x | {five / numpy_ref:19.1f}x")
+        print(
+            f"{res:>10} {nodes:>8,} | {cells[0]:>18} | {cells[1]:>18} | {cells[2]:>18} | "
+            f"{five / compiled:22.1f}x | {five / numpy_ref:19.1f}x"
+        )
 
     print("\n2. conformance harness per mechanism (s of CPU time, warm, best of 3)")
     for name, cls in [*MECHANISMS.builtins.items(), ("five_bar (example)", five_bar_cls)]:

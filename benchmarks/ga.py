@@ -73,8 +73,9 @@ def old_tree(ref: str, into: Path) -> Path:
 def old_workers_module(ref: str, into: Path):
     """``pipeline/evaluation/workers.py`` at ``ref``, importable (also by loky's workers, which
     start with this process's ``sys.path``) as the module ``old_workers``."""
-    source = subprocess.run(["git", "show", f"{ref}:pipeline/evaluation/workers.py"], cwd=ROOT,
-                            capture_output=True, text=True, check=True).stdout
+    source = subprocess.run(
+        ["git", "show", f"{ref}:pipeline/evaluation/workers.py"], cwd=ROOT, capture_output=True, text=True, check=True
+    ).stdout
     (into / "old_workers.py").write_text(source)
     sys.path.insert(0, str(into))
     return importlib.import_module("old_workers")
@@ -107,8 +108,11 @@ def dispatch_comparison(batches: list[np.ndarray], repeats: int, ref: str, scrat
             first, second = np.array_split(batch, 2)
             group.map(_evaluate_chunk, [(spec, None, second)], local=lambda: chunk(first))
 
-    ways = {"one process": serial, "new: caller's chunk + loky future (pool.py)": new_pool,
-            "old: caller's chunk + socket worker group (workers.py)": old_group}
+    ways = {
+        "one process": serial,
+        "new: caller's chunk + loky future (pool.py)": new_pool,
+        "old: caller's chunk + socket worker group (workers.py)": old_group,
+    }
     # start the workers and load the kernels outside the timing
     pool.map(_evaluate_chunk, [(spec, None, batches[0][:1])], local=lambda: None, timeout=120)
     group.map(_evaluate_chunk, [(spec, None, batches[0][:1])], local=lambda: None)
@@ -121,19 +125,28 @@ def dispatch_comparison(batches: list[np.ndarray], repeats: int, ref: str, scrat
     pool.close()
     group.close()
     new, old_name = list(ways)[1], list(ways)[2]
-    lines = [f"The 1-worker GA run's {len(batches)} batches ({sum(len(b) for b in batches)} designs), "
-             f"replayed {repeats} times in turn, each way on 2 processes except the first:", "",
-             "| way | " + " | ".join(f"run {k + 1} [s]" for k in range(repeats)) + " | speed-up over one process |",
-             "|---|" + "---|" * repeats + "---|"]
+    lines = [
+        f"The 1-worker GA run's {len(batches)} batches ({sum(len(b) for b in batches)} designs), "
+        f"replayed {repeats} times in turn, each way on 2 processes except the first:",
+        "",
+        "| way | " + " | ".join(f"run {k + 1} [s]" for k in range(repeats)) + " | speed-up over one process |",
+        "|---|" + "---|" * repeats + "---|",
+    ]
     for name in ways:
         speedups = [a / b for a, b in zip(times["one process"], times[name])]
-        lines.append(f"| {name} | " + " | ".join(f"{t:.2f}" for t in times[name])
-                     + f" | {min(speedups):.2f}-{max(speedups):.2f}x |")
+        lines.append(
+            f"| {name} | "
+            + " | ".join(f"{t:.2f}" for t in times[name])
+            + f" | {min(speedups):.2f}-{max(speedups):.2f}x |"
+        )
     ratios = [n / o for o, n in zip(times[old_name], times[new])]
-    lines += ["", f"Speed-up of the old socket group over the new pool (new time / old time), run by run: "
-                  f"{', '.join(f'{r:.2f}' for r in ratios)} (median {statistics.median(ratios):.2f}). "
-                  f"Criterion to keep workers.py: >= 1.2. Load average when done: "
-                  f"{', '.join(f'{x:.1f}' for x in os.getloadavg())} on {os.cpu_count()} cores."]
+    lines += [
+        "",
+        f"Speed-up of the old socket group over the new pool (new time / old time), run by run: "
+        f"{', '.join(f'{r:.2f}' for r in ratios)} (median {statistics.median(ratios):.2f}). "
+        f"Criterion to keep workers.py: >= 1.2. Load average when done: "
+        f"{', '.join(f'{x:.1f}' for x in os.getloadavg())} on {os.cpu_count()} cores.",
+    ]
     return lines
 
 
@@ -144,26 +157,44 @@ def compile_ahead_comparison(repeats: int, ref: str, scratch: Path) -> list[str]
     times: dict[str, list[float]] = {"1": [], "0": []}
     for k in range(repeats):
         for ahead in times:
-            env = {**os.environ, "NUMBA_CACHE_DIR": str(scratch / f"numba-{ahead}-{k}"),
-                   "PM_DESIGN_COMPILE_AHEAD": ahead, "PYTHONPATH": str(tree)}
+            env = {
+                **os.environ,
+                "NUMBA_CACHE_DIR": str(scratch / f"numba-{ahead}-{k}"),
+                "PM_DESIGN_COMPILE_AHEAD": ahead,
+                "PYTHONPATH": str(tree),
+            }
             t0 = time.perf_counter()
-            proc = subprocess.run([sys.executable, "-m", "pipeline", "+experiment=h4_mixed",
-                                   f"paths.output_dir={scratch / f'out-{ahead}-{k}'}"],
-                                  cwd=tree, capture_output=True, text=True, env=env)
+            proc = subprocess.run(
+                [
+                    sys.executable,
+                    "-m",
+                    "pipeline",
+                    "+experiment=h4_mixed",
+                    f"paths.output_dir={scratch / f'out-{ahead}-{k}'}",
+                ],
+                cwd=tree,
+                capture_output=True,
+                text=True,
+                env=env,
+            )
             times[ahead].append(time.perf_counter() - t0)
             if proc.returncode != 0:
                 raise SystemExit(f"main job at {ref} failed:\n{proc.stderr[-2000:]}")
     ratios = [off / on for on, off in zip(times["1"], times["0"])]
-    return [f"`python -m pipeline +experiment=h4_mixed` at {ref}, empty numba and stage caches, fresh "
-            f"process, {repeats} times in turn:", "",
-            "| compile-ahead helper | " + " | ".join(f"run {k + 1} [s]" for k in range(repeats)) + " |",
-            "|---|" + "---|" * repeats,
-            "| on | " + " | ".join(f"{t:.1f}" for t in times["1"]) + " |",
-            "| off | " + " | ".join(f"{t:.1f}" for t in times["0"]) + " |", "",
-            f"off / on, run by run: {', '.join(f'{r:.2f}' for r in ratios)} "
-            f"(median {statistics.median(ratios):.2f}). Criterion to keep compile_ahead.py: >= 1.2; "
-            f"it only acts on a machine's first run (an empty numba cache). Load average when done: "
-            f"{', '.join(f'{x:.1f}' for x in os.getloadavg())} on {os.cpu_count()} cores."]
+    return [
+        f"`python -m pipeline +experiment=h4_mixed` at {ref}, empty numba and stage caches, fresh "
+        f"process, {repeats} times in turn:",
+        "",
+        "| compile-ahead helper | " + " | ".join(f"run {k + 1} [s]" for k in range(repeats)) + " |",
+        "|---|" + "---|" * repeats,
+        "| on | " + " | ".join(f"{t:.1f}" for t in times["1"]) + " |",
+        "| off | " + " | ".join(f"{t:.1f}" for t in times["0"]) + " |",
+        "",
+        f"off / on, run by run: {', '.join(f'{r:.2f}' for r in ratios)} "
+        f"(median {statistics.median(ratios):.2f}). Criterion to keep compile_ahead.py: >= 1.2; "
+        f"it only acts on a machine's first run (an empty numba cache). Load average when done: "
+        f"{', '.join(f'{x:.1f}' for x in os.getloadavg())} on {os.cpu_count()} cores.",
+    ]
 
 
 def main() -> None:
@@ -179,28 +210,46 @@ def main() -> None:
     for n_jobs in (1, 2):
         times[n_jobs], results[n_jobs] = run(n_jobs, args.w_d, args.seed, batches if n_jobs == 1 else [])
         r = results[n_jobs]
-        print(f"n_jobs={n_jobs}: {times[n_jobs]:6.2f} s, {r.n_evaluations} evaluations "
-              f"({r.n_evaluations / times[n_jobs]:.0f}/s), best eta {r.fun:.5f} at {np.round(r.x, 5)}")
+        print(
+            f"n_jobs={n_jobs}: {times[n_jobs]:6.2f} s, {r.n_evaluations} evaluations "
+            f"({r.n_evaluations / times[n_jobs]:.0f}/s), best eta {r.fun:.5f} at {np.round(r.x, 5)}"
+        )
     cols = [c for c in results[1].history.columns if c != "wall_time"]
     same = results[1].history[cols].equals(results[2].history[cols])
-    summary = (f"GA 30 x 150 (H4, mixed index, w_d={args.w_d}, seed {args.seed}): 1 worker {times[1]:.2f} s, "
-               f"2 workers {times[2]:.2f} s (goal <= 1.2 s); speed-up {times[1] / times[2]:.2f}x "
-               f"(goal >= 1.8x); identical histories: {same}")
+    summary = (
+        f"GA 30 x 150 (H4, mixed index, w_d={args.w_d}, seed {args.seed}): 1 worker {times[1]:.2f} s, "
+        f"2 workers {times[2]:.2f} s (goal <= 1.2 s); speed-up {times[1] / times[2]:.2f}x "
+        f"(goal >= 1.8x); identical histories: {same}"
+    )
     print(summary)
     if not (args.dispatch or args.compile_ahead):
         return
-    sections = [f"# Fitness dispatch benchmark (`python -m benchmarks.ga{' --dispatch' * args.dispatch}"
-                f"{' --compile-ahead' * args.compile_ahead} --repeats {args.repeats}`)", "",
-                f"Generated by `benchmarks/ga.py` on {os.cpu_count()} cores; do not edit by hand.", "",
-                "## The GA run", "", summary]
+    sections = [
+        f"# Fitness dispatch benchmark (`python -m benchmarks.ga{' --dispatch' * args.dispatch}"
+        f"{' --compile-ahead' * args.compile_ahead} --repeats {args.repeats}`)",
+        "",
+        f"Generated by `benchmarks/ga.py` on {os.cpu_count()} cores; do not edit by hand.",
+        "",
+        "## The GA run",
+        "",
+        summary,
+    ]
     scratch = Path(tempfile.mkdtemp(prefix="pm-bench-"))
     try:
         if args.dispatch:
-            sections += ["", "## Batch dispatch: new (loky executor) against old (socket worker group)", "",
-                         *dispatch_comparison(batches, args.repeats, args.old_ref, scratch)]
+            sections += [
+                "",
+                "## Batch dispatch: new (loky executor) against old (socket worker group)",
+                "",
+                *dispatch_comparison(batches, args.repeats, args.old_ref, scratch),
+            ]
         if args.compile_ahead:
-            sections += ["", "## Compile-ahead helper (removed)", "",
-                         *compile_ahead_comparison(args.repeats, args.old_ref, scratch)]
+            sections += [
+                "",
+                "## Compile-ahead helper (removed)",
+                "",
+                *compile_ahead_comparison(args.repeats, args.old_ref, scratch),
+            ]
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
     text = "\n".join(sections) + "\n"

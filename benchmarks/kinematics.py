@@ -16,11 +16,15 @@ from kinematics import get_mechanism
 DESIGNS = {
     "h4": (dict(d=13.52484, h=13.88781, Qz=35.18892), ([-40, -40, -60, -1.5], [40, 40, 40, 1.5])),
     "tricept": (dict(a=250.0, b=400.0, d=100.0), ([400, -0.8, -0.8], [750, 0.8, 0.8])),
-    "rpr3": (dict(base=[[0, 0], [200, 0], [0, 200]], platform=[[0, 0], [50, 0], [40, 40]],
-                  rho_min=80.0, rho_max=160.0), ([0, 0, -np.pi], [200, 200, np.pi])),
+    "rpr3": (
+        dict(base=[[0, 0], [200, 0], [0, 200]], platform=[[0, 0], [50, 0], [40, 40]], rho_min=80.0, rho_max=160.0),
+        ([0, 0, -np.pi], [200, 200, np.pi]),
+    ),
     "rpr2": (dict(b=5.0, q_min=6.0, q_max=9.6), ([-6, -9], [11, 9])),
-    "gough_stewart": (dict(r_base=400.0, r_platform=250.0, sep_base=30.0, sep_platform=30.0, height=700.0),
-                      ([-150, -150, 600, -0.4, -0.4, -0.4], [150, 150, 850, 0.4, 0.4, 0.4])),
+    "gough_stewart": (
+        dict(r_base=400.0, r_platform=250.0, sep_base=30.0, sep_platform=30.0, height=700.0),
+        ([-150, -150, 600, -0.4, -0.4, -0.4], [150, 150, 850, 0.4, 0.4, 0.4]),
+    ),
 }
 
 

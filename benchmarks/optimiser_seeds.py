@@ -66,10 +66,15 @@ def main() -> None:
         top = max(runs, key=lambda r: r[1])
         if top[1] > best:  # a seed beat the golden value: it becomes the best known (and is written back)
             refined = refined_value(name, top[4])
-            ref = golden[name] = {**ref, "value": top[1], "design": dict(zip(ref["design"], map(float, top[4]))),
-                                  "found_by": f"cmaes seed {top[0]} + polish (benchmarks.optimiser_seeds)",
-                                  "value_refined": refined, "error": abs(refined - top[1]),
-                                  "relative_error": abs(refined - top[1]) / abs(top[1])}
+            ref = golden[name] = {
+                **ref,
+                "value": top[1],
+                "design": dict(zip(ref["design"], map(float, top[4]))),
+                "found_by": f"cmaes seed {top[0]} + polish (benchmarks.optimiser_seeds)",
+                "value_refined": refined,
+                "error": abs(refined - top[1]),
+                "relative_error": abs(refined - top[1]) / abs(top[1]),
+            }
             save(golden)
             best, scale = ref["value"], abs(ref["value"])
             tolerance = max(TOLERANCE, ref["relative_error"])
@@ -82,27 +87,37 @@ def main() -> None:
             problem = make_problem(name)
             ga = GA(GAConfig(seed=0)).run(problem)
             error = abs(refined_value(name, ga.x) - ga.fun)
-            cols = reference_columns({"objective_value": ga.fun, "objective_error": error},
-                                     {"value": best, "x": [], "found_by": "", "n_evaluations": 0,
-                                      "error": ref["error"]}, [])
+            cols = reference_columns(
+                {"objective_value": ga.fun, "objective_error": error},
+                {"value": best, "x": [], "found_by": "", "n_evaluations": 0, "error": ref["error"]},
+                [],
+            )
             ga_label = f"{cols['reference_gap_label']} ({problem.n_evaluations} evaluations)"
         design = ", ".join(f"{k} {v:.6g}" for k, v in ref["design"].items())
-        summary.append(f"| {name} | {best:.8g} | {design} | {ref['found_by']}; {ref['agreeing']} of "
-                       f"{len(ref['searches'])} searches agree | {100 * ref['relative_error']:.2g} % | "
-                       f"{100 * tolerance:.2g} % | {ok.sum()}/{len(runs)} | {int(np.median(evaluations))} | "
-                       f"{evaluations.max()} | {100 * gaps.max():.4f} % | {ga_label} |")
+        summary.append(
+            f"| {name} | {best:.8g} | {design} | {ref['found_by']}; {ref['agreeing']} of "
+            f"{len(ref['searches'])} searches agree | {100 * ref['relative_error']:.2g} % | "
+            f"{100 * tolerance:.2g} % | {ok.sum()}/{len(runs)} | {int(np.median(evaluations))} | "
+            f"{evaluations.max()} | {100 * gaps.max():.4f} % | {ga_label} |"
+        )
         details.append(f"\n### {name} (best known {best:.8g}; {time.perf_counter() - start:.0f} s)\n")
         details.append("| seed | value | gap to best known | evaluations | success | design |")
         details.append("| --- | --- | --- | --- | --- | --- |")
         for (seed, value, gap, n_eval, x), success in zip(runs, ok):
-            details.append(f"| {seed} | {value:.8g} | {100 * gap:.4f} % | {n_eval} | "
-                           f"{'yes' if success else 'NO'} | {', '.join(f'{v:.6g}' for v in x)} |")
+            details.append(
+                f"| {seed} | {value:.8g} | {100 * gap:.4f} % | {n_eval} | "
+                f"{'yes' if success else 'NO'} | {', '.join(f'{v:.6g}' for v in x)} |"
+            )
         print(f"{name}: {ok.sum()}/{len(runs)}", flush=True)
-    print("\n## Recommended optimiser (cmaes + polish) on seeds 0-%d against the best known\n" % (args.seeds - 1))
-    print("Success: gap <= max(0.1 %, the best known's estimated error) within "
-          f"{MAX_EVALUATIONS} evaluations. GA: the paper's GA (30 x 150, seed 0) against the best known.\n")
-    print("| problem | best known | design | found by | its error | tolerance | cmaes successes | "
-          "median evaluations | worst evaluations | worst gap | paper GA (seed 0) gap |")
+    print(f"\n## Recommended optimiser (cmaes + polish) on seeds 0-{args.seeds - 1} against the best known\n")
+    print(
+        "Success: gap <= max(0.1 %, the best known's estimated error) within "
+        f"{MAX_EVALUATIONS} evaluations. GA: the paper's GA (30 x 150, seed 0) against the best known.\n"
+    )
+    print(
+        "| problem | best known | design | found by | its error | tolerance | cmaes successes | "
+        "median evaluations | worst evaluations | worst gap | paper GA (seed 0) gap |"
+    )
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     print("\n".join(summary))
     print("\n## Per seed")

@@ -66,8 +66,9 @@ class Traced(Problem):
 def make_problem(mechanism: str, objective: str, w_d: float, n_jobs: int = 2):
     config = MechanismConfig(name=mechanism)
     evaluator = DesignEvaluator(config, None, n_jobs)
-    return lambda: Traced(lambda x: objective_values(objective, evaluator.evaluate(x), w_d),
-                          config.design.lower, config.design.upper)
+    return lambda: Traced(
+        lambda x: objective_values(objective, evaluator.evaluate(x), w_d), config.design.lower, config.design.upper
+    )
 
 
 def evaluations_to(trace: list[tuple[int, float]], target: float) -> int | None:
@@ -81,8 +82,11 @@ def run_optimisers(factory, quick: bool) -> list[tuple[str, int, float, int, lis
     runs = []
     methods = [("IPOP-CMA-ES + polish", lambda s: CMAES(CMAESConfig(seed=s)), True)]
     if not quick:
-        methods = [("paper GA 30x150", lambda s: GA(GAConfig(seed=s)), False),
-                   ("DE 30x150", lambda s: DE(DEConfig(seed=s)), False), *methods]
+        methods = [
+            ("paper GA 30x150", lambda s: GA(GAConfig(seed=s)), False),
+            ("DE 30x150", lambda s: DE(DEConfig(seed=s)), False),
+            *methods,
+        ]
     for name, build, with_polish in methods:
         for seed in SEEDS:
             problem = factory()
@@ -111,8 +115,10 @@ def main_job_times() -> dict[str, float]:
     for experiment in ("h4_mixed", "h4_design"):
         with tempfile.TemporaryDirectory() as tmp:
             with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3"):
-                cfg = compose(config_name="config", overrides=[f"+experiment={experiment}",
-                                                               f"paths.output_dir={tmp}", "plot.enabled=false"])
+                cfg = compose(
+                    config_name="config",
+                    overrides=[f"+experiment={experiment}", f"paths.output_dir={tmp}", "plot.enabled=false"],
+                )
             start = time.perf_counter()
             run_study(cfg, Path(tmp) / "run")
             out[experiment] = time.perf_counter() - start
@@ -141,13 +147,17 @@ def main() -> None:
     print("\n## Target: the default optimiser within 0.1 % of the reference in every seed, <= 600 evaluations")
     worst_gap = max(s[2] for s in summary)
     most = max(s[3] for s in summary)
-    print(f"worst gap {100 * worst_gap:.4f} %, most evaluations {most}: "
-          f"{'met' if worst_gap <= TOLERANCE and most <= 600 else 'NOT met'}")
+    print(
+        f"worst gap {100 * worst_gap:.4f} %, most evaluations {most}: "
+        f"{'met' if worst_gap <= TOLERANCE and most <= 600 else 'NOT met'}"
+    )
     times = main_job_times()
     ratio = times["h4_design"] / times["h4_mixed"]
-    print(f"\n## Main job from an empty cache (2 workers, no plots): h4_mixed (paper GA + reference) "
-          f"{times['h4_mixed']:.1f} s, h4_design (CMA-ES + polish) {times['h4_design']:.1f} s, ratio {ratio:.2f} "
-          f"(target <= 0.20: {'met' if ratio <= 0.2 else 'NOT met'})")
+    print(
+        f"\n## Main job from an empty cache (2 workers, no plots): h4_mixed (paper GA + reference) "
+        f"{times['h4_mixed']:.1f} s, h4_design (CMA-ES + polish) {times['h4_design']:.1f} s, ratio {ratio:.2f} "
+        f"(target <= 0.20: {'met' if ratio <= 0.2 else 'NOT met'})"
+    )
 
 
 if __name__ == "__main__":

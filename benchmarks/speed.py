@@ -39,15 +39,14 @@ import numpy as np
 
 from benchmarks.evaluate import best_time
 from kinematics import MECHANISMS, get_mechanism, kernels
-from kinematics.workspace import _grid_axes, _grid_poses, _exact_axis, default_resolution, evaluate
+from kinematics.workspace import _exact_axis, _grid_axes, _grid_poses, default_resolution, evaluate
 
 ROOT = Path(__file__).resolve().parents[1]
 #: designs evaluated per mechanism (the papers' examples; tests/conftest.py PAPER_DESIGNS)
 DESIGNS = {
     "h4": dict(d=13.52484, h=13.88781, Qz=35.18892),  # seed 000 Table 1
     "tricept": dict(a=250.0, b=400.0, d=100.0),
-    "rpr3": dict(base=[[0, 0], [200, 0], [0, 200]], platform=[[0, 0], [50, 0], [40, 40]],
-                 rho_min=80.0, rho_max=160.0),
+    "rpr3": dict(base=[[0, 0], [200, 0], [0, 200]], platform=[[0, 0], [50, 0], [40, 40]], rho_min=80.0, rho_max=160.0),
     "rpr2": dict(b=5.0, q_min=6.0, q_max=9.6),
     "delta": dict(R=200.0, r=50.0, la=200.0, lb=400.0),
     # constant-orientation workspace at the home orientation (its default evaluation)
@@ -98,10 +97,21 @@ def evaluation_table() -> list[list[str]]:
             ref_ev = evaluate(mech, error_estimate=False)
         naive = naive_seconds_per_node(mech) * ev.n_samples
         same = abs(ev.volume / ref_ev.volume - 1) if ref_ev.volume else abs(ev.volume)
-        rows.append([name, str(res), f"{ev.n_samples:,}", f"{1e3 * fast:.2f}", f"{1e3 * reference:.2f}",
-                     f"{reference / fast:.1f}x", f"{1e3 * naive:.0f}", f"{naive / fast:.0f}x",
-                     f"{100 * (ev.volume / fine.volume - 1):+.3f} %", f"{100 * (ev.gdi / fine.gdi - 1):+.3f} %",
-                     f"{same:.0e}"])
+        rows.append(
+            [
+                name,
+                str(res),
+                f"{ev.n_samples:,}",
+                f"{1e3 * fast:.2f}",
+                f"{1e3 * reference:.2f}",
+                f"{reference / fast:.1f}x",
+                f"{1e3 * naive:.0f}",
+                f"{naive / fast:.0f}x",
+                f"{100 * (ev.volume / fine.volume - 1):+.3f} %",
+                f"{100 * (ev.gdi / fine.gdi - 1):+.3f} %",
+                f"{same:.0e}",
+            ]
+        )
     return rows
 
 
@@ -124,15 +134,27 @@ def resolution_table() -> list[list[str]]:
     for res in (12, 16, 24, 32, 48):
         seconds = best_time(lambda: evaluate(mech, resolution=res, error_estimate=False), 3)
         ev = evaluate(mech, resolution=res, error_estimate=False)
-        rows.append([str(res), f"{ev.n_samples:,}", f"{1e3 * seconds:.2f}",
-                     f"{100 * (ev.volume / fine.volume - 1):+.3f} %", f"{100 * (ev.gdi / fine.gdi - 1):+.3f} %"])
+        rows.append(
+            [
+                str(res),
+                f"{ev.n_samples:,}",
+                f"{1e3 * seconds:.2f}",
+                f"{100 * (ev.volume / fine.volume - 1):+.3f} %",
+                f"{100 * (ev.gdi / fine.gdi - 1):+.3f} %",
+            ]
+        )
     return rows
 
 
 def run_cli(args: list[str], out: Path, env: dict[str, str] | None = None) -> float:
     t0 = time.perf_counter()
-    proc = subprocess.run([sys.executable, "-m", "pipeline", *args, f"paths.output_dir={out}"], cwd=ROOT,
-                          capture_output=True, text=True, env={**os.environ, **(env or {})})
+    proc = subprocess.run(
+        [sys.executable, "-m", "pipeline", *args, f"paths.output_dir={out}"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        env={**os.environ, **(env or {})},
+    )
     if proc.returncode != 0:
         raise SystemExit(f"benchmark run failed: {' '.join(args)}\n{proc.stderr[-2000:]}")
     return time.perf_counter() - t0
@@ -143,24 +165,31 @@ def main_job_times(scratch: Path) -> dict[str, float]:
     each in a fresh process."""
     env = {"NUMBA_CACHE_DIR": str(scratch / "numba-cache")}
     out = scratch / "main-cold"
-    return {"cold": run_cli(["+experiment=h4_mixed"], out, env),
-            "compiled": run_cli(["+experiment=h4_mixed"], scratch / "main-compiled", env),
-            "warm": run_cli(["+experiment=h4_mixed"], out, env)}
+    return {
+        "cold": run_cli(["+experiment=h4_mixed"], out, env),
+        "compiled": run_cli(["+experiment=h4_mixed"], scratch / "main-compiled", env),
+        "warm": run_cli(["+experiment=h4_mixed"], out, env),
+    }
 
 
 def preset_against_paper_ga(scratch: Path) -> list[list[str]]:
     """``h4_design`` (CMA-ES + polish) against the paper GA (``h4_mixed`` without its reference run),
     each from an empty stage cache: the optimise stage (from the manifests) and the whole process."""
     rows = []
-    for label, args in (("paper GA 30 x 150 (h4_mixed, optimizer.reference=false)",
-                         ["+experiment=h4_mixed", "optimizer.reference=false"]),
-                        ("h4_design (IPOP-CMA-ES + polish)", ["+experiment=h4_design"])):
+    for label, args in (
+        (
+            "paper GA 30 x 150 (h4_mixed, optimizer.reference=false)",
+            ["+experiment=h4_mixed", "optimizer.reference=false"],
+        ),
+        ("h4_design (IPOP-CMA-ES + polish)", ["+experiment=h4_design"]),
+    ):
         out = scratch / label.split()[0]
         wall = run_cli([*args, "plot.enabled=false"], out)
         manifest = json.loads(next(out.rglob("manifest.json")).read_text())
         rows.append([label, f"{manifest['timings']['optimise']:.2f}", f"{wall:.1f}"])
-    rows.append(["ratio", f"{float(rows[1][1]) / float(rows[0][1]):.2f}",
-                 f"{float(rows[1][2]) / float(rows[0][2]):.2f}"])
+    rows.append(
+        ["ratio", f"{float(rows[1][1]) / float(rows[0][1]):.2f}", f"{float(rows[1][2]) / float(rows[0][2]):.2f}"]
+    )
     return rows
 
 
@@ -171,8 +200,10 @@ def sweep_times(scratch: Path) -> list[list[str]]:
         values = ",".join(str(round(v, 3)) for v in np.linspace(0.2, 0.8, n_jobs))
         sweep = ["-m", *SWEEP_STUDY, f"objective.w_d={values}"]
         basic = run_cli(sweep, scratch / f"basic{n_jobs}")
-        side = run_cli([*sweep, "hydra/launcher=joblib", "hydra.launcher.n_jobs=2", "parallel.n_jobs=1"],
-                       scratch / f"joblib{n_jobs}")
+        side = run_cli(
+            [*sweep, "hydra/launcher=joblib", "hydra.launcher.n_jobs=2", "parallel.n_jobs=1"],
+            scratch / f"joblib{n_jobs}",
+        )
         base_per_job = base_per_job or basic
         rows.append([str(n_jobs), f"{basic:.1f}", f"{side:.1f}", f"{basic / side:.2f}x"])
     return rows
@@ -202,31 +233,53 @@ def main() -> None:
     args = parser.parse_args()
     sections = []
 
-    header = ["mechanism", "resolution", "nodes", "compiled [ms]", "numpy [ms]", "numpy/compiled",
-              "naive loop [ms]", "naive/compiled", "V vs 4x finer", "GDI vs 4x finer", "|V compiled/numpy - 1|"]
-    sections.append("## 1. One design at the default resolution (one core)\n\n"
-                    + markdown_table(header, evaluation_table()))
+    header = [
+        "mechanism",
+        "resolution",
+        "nodes",
+        "compiled [ms]",
+        "numpy [ms]",
+        "numpy/compiled",
+        "naive loop [ms]",
+        "naive/compiled",
+        "V vs 4x finer",
+        "GDI vs 4x finer",
+        "|V compiled/numpy - 1|",
+    ]
+    sections.append(
+        "## 1. One design at the default resolution (one core)\n\n" + markdown_table(header, evaluation_table())
+    )
     fast, reference = conditioning_rate()
-    sections.append(f"## 2. `inverse_condition`, 10^5 H4 poses (one core)\n\ncompiled {fast / 1e6:.2f} M poses/s, "
-                    f"numpy {reference / 1e6:.2f} M poses/s ({fast / reference:.1f}x; goal >= 4 M poses/s)")
-    sections.append("## 3. H4 cost against the resolution (error against resolution 96)\n\n" + markdown_table(
-        ["resolution", "(x, y, θ) nodes", "ms per design", "V error", "GDI error"], resolution_table()))
+    sections.append(
+        f"## 2. `inverse_condition`, 10^5 H4 poses (one core)\n\ncompiled {fast / 1e6:.2f} M poses/s, "
+        f"numpy {reference / 1e6:.2f} M poses/s ({fast / reference:.1f}x; goal >= 4 M poses/s)"
+    )
+    sections.append(
+        "## 3. H4 cost against the resolution (error against resolution 96)\n\n"
+        + markdown_table(["resolution", "(x, y, θ) nodes", "ms per design", "V error", "GDI error"], resolution_table())
+    )
     if not args.skip_cli:
         scratch = Path(tempfile.mkdtemp(prefix="pm-speed-"))
         try:
             main_job = main_job_times(scratch)
-            sections.append(f"## 4. The main job, `python -m pipeline +experiment=h4_mixed`, fresh process\n\n"
-                            f"cold (empty stage cache, empty numba cache: imports and compilation count) "
-                            f"{main_job['cold']:.1f} s (goal <= 12 s); empty stage cache "
-                            f"with the kernels compiled {main_job['compiled']:.1f} s; warm {main_job['warm']:.1f} s "
-                            f"(goal <= 3 s)")
-            sections.append("## 4b. The fast preset against the paper GA, seconds (empty stage cache)\n\n"
-                            + markdown_table(["run", "optimise stage", "whole process"],
-                                             preset_against_paper_ga(scratch)))
+            sections.append(
+                f"## 4. The main job, `python -m pipeline +experiment=h4_mixed`, fresh process\n\n"
+                f"cold (empty stage cache, empty numba cache: imports and compilation count) "
+                f"{main_job['cold']:.1f} s (goal <= 12 s); empty stage cache "
+                f"with the kernels compiled {main_job['compiled']:.1f} s; warm {main_job['warm']:.1f} s "
+                f"(goal <= 3 s)"
+            )
+            sections.append(
+                "## 4b. The fast preset against the paper GA, seconds (empty stage cache)\n\n"
+                + markdown_table(["run", "optimise stage", "whole process"], preset_against_paper_ga(scratch))
+            )
             rows = sweep_times(scratch)
-            sections.append("## 5. Sweeps of a small study (`h4_design`, 16 samples, 120 evaluations), wall seconds\n\n"
-                            + markdown_table(["jobs", "basic launcher, 2 workers per job",
-                                              "joblib launcher, 2 jobs x 1 worker", "ratio"], rows))
+            sections.append(
+                "## 5. Sweeps of a small study (`h4_design`, 16 samples, 120 evaluations), wall seconds\n\n"
+                + markdown_table(
+                    ["jobs", "basic launcher, 2 workers per job", "joblib launcher, 2 jobs x 1 worker", "ratio"], rows
+                )
+            )
             # per-job figures for the projection: the 4-job basic sweep's time per job, and the
             # overhead of a job = the warm main job (process start, imports, Hydra, cache reads)
             per_job = float(rows[-1][1]) / 4
@@ -235,14 +288,17 @@ def main() -> None:
                 f"From this run: {per_job:.1f} s per job (4-job basic sweep / 4, 2 workers) and "
                 f"{main_job['warm']:.1f} s overhead per job (the warm main job: start, imports, Hydra, "
                 f"cache reads); one core per job doubles the compute part.\n\n"
-                + markdown_table(["workers", "waves", "wall time"], projection(2 * per_job, main_job["warm"])))
+                + markdown_table(["workers", "waves", "wall time"], projection(2 * per_job, main_job["warm"]))
+            )
         finally:
             shutil.rmtree(scratch, ignore_errors=True)
     text = "\n\n".join(sections) + "\n"
     print(text)
     if args.markdown:
-        args.markdown.write_text("# Speed benchmarks (generated by `python -m benchmarks.speed`)\n\n"
-                                 "Measured on this project's 2-core machine; rerun to update.\n\n" + text)
+        args.markdown.write_text(
+            "# Speed benchmarks (generated by `python -m benchmarks.speed`)\n\n"
+            "Measured on this project's 2-core machine; rerun to update.\n\n" + text
+        )
 
 
 if __name__ == "__main__":

@@ -34,9 +34,23 @@ backend_before = plt.get_backend()
 print(f"results in {out}")
 
 # %%
-proc = subprocess.run([sys.executable, "-m", "pipeline", "-m", "+experiment=rpr2_mixed", "+debug=fast",
-                       "plot.enabled=true", "optimizer.population=6", "optimizer.generations=5",
-                       "objective.w_d=0,0.5,1", f"paths.output_dir={out}"], capture_output=True, text=True)
+proc = subprocess.run(
+    [
+        sys.executable,
+        "-m",
+        "pipeline",
+        "-m",
+        "+experiment=rpr2_mixed",
+        "+debug=fast",
+        "plot.enabled=true",
+        "optimizer.population=6",
+        "optimizer.generations=5",
+        "objective.w_d=0,0.5,1",
+        f"paths.output_dir={out}",
+    ],
+    capture_output=True,
+    text=True,
+)
 print(proc.stdout)
 assert proc.returncode == 0, proc.stderr[-2000:]
 
@@ -47,8 +61,18 @@ assert plt.get_backend() == backend_before, "importing pipeline changed matplotl
 # the sweep ran with +debug=fast (tiny sizes): debug runs are left out of the default view, so ask for them
 best = read_dataset(out / "dataset", "best", purposes=None)
 units = best.attrs["units"]
-columns = ["mechanism", "w_d", "b", "q_min", "param_q_max_mm", "objective_value", "gdi", "suri", "volume",
-           "volume_unit"]
+columns = [
+    "mechanism",
+    "w_d",
+    "b",
+    "q_min",
+    "param_q_max_mm",
+    "objective_value",
+    "gdi",
+    "suri",
+    "volume",
+    "volume_unit",
+]
 print({c: units[c] for c in columns if units.get(c)})
 best[columns]
 

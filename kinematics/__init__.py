@@ -78,9 +78,7 @@ def get_mechanism(name: str, **params: object) -> Mechanism:
     try:
         cls = MECHANISMS[name]
     except (KeyError, TypeError):
-        raise ValueError(
-            f"unknown mechanism {name!r}; allowed: {', '.join(MECHANISMS)}"
-        ) from None
+        raise ValueError(f"unknown mechanism {name!r}; allowed: {', '.join(MECHANISMS)}") from None
     try:
         return cls(**params)
     except TypeError as exc:  # wrong keyword: name the accepted ones

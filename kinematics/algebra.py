@@ -125,7 +125,7 @@ def polynomial_roots(coefs_high_first: np.ndarray) -> np.ndarray:
     if scale == 0:
         return np.empty(0, dtype=complex)
     nz = np.nonzero(np.abs(c) > 1e-13 * scale)[0]
-    c = c[nz[0]:]
+    c = c[nz[0] :]
     if c.size <= 1:
         return np.empty(0, dtype=complex)
     return np.roots(c / scale)
@@ -152,9 +152,9 @@ def sylvester_matrix_polynomial(f: np.ndarray, g: np.ndarray) -> np.ndarray:
     size = m + n
     S = np.zeros((dx, size, size))
     for row in range(n):  # n shifted copies of f (descending powers of y)
-        S[: f.shape[0], row, row: row + m + 1] = f[:, ::-1]
+        S[: f.shape[0], row, row : row + m + 1] = f[:, ::-1]
     for row in range(m):
-        S[: g.shape[0], n + row, row: row + n + 1] = g[:, ::-1]
+        S[: g.shape[0], n + row, row : row + n + 1] = g[:, ::-1]
     return S
 
 
@@ -176,9 +176,9 @@ def matrix_polynomial_eigenvalues(S: np.ndarray) -> np.ndarray:
     A = np.zeros((d * k, d * k))
     B = np.eye(d * k)
     A[: (d - 1) * k, k:] = np.eye((d - 1) * k)
-    for l in range(d):
-        A[(d - 1) * k:, l * k: (l + 1) * k] = -S[l]
-    B[(d - 1) * k:, (d - 1) * k:] = S[d]
+    for j in range(d):
+        A[(d - 1) * k :, j * k : (j + 1) * k] = -S[j]
+    B[(d - 1) * k :, (d - 1) * k :] = S[d]
     vals = scipy.linalg.eigvals(A, B)
     return vals[np.isfinite(vals)]
 

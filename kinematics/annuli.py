@@ -38,8 +38,7 @@ def two_annuli_area(distance: float, r_in: float, r_out: float) -> float:
     Inclusion-exclusion on discs (inner discs lie inside outer ones):
     ``|O1 O2| - |O1 I2| - |I1 O2| + |I1 I2|``.
     """
-    return (lens_area(r_out, r_out, distance) - 2 * lens_area(r_out, r_in, distance)
-            + lens_area(r_in, r_in, distance))
+    return lens_area(r_out, r_out, distance) - 2 * lens_area(r_out, r_in, distance) + lens_area(r_in, r_in, distance)
 
 
 def discs_intersection_area(centres: np.ndarray, radii: np.ndarray) -> float:
@@ -81,8 +80,9 @@ def discs_intersection_area(centres: np.ndarray, radii: np.ndarray) -> float:
             # identical circles: let only the first one draw the shared arc
             duplicate = any(k < i and np.allclose(centres[k], c) and radii[k] == r for k in others)
             if inside and not duplicate:
-                area += 0.5 * (r * r * (b - a) + r * c[0] * (math.sin(b) - math.sin(a))
-                               - r * c[1] * (math.cos(b) - math.cos(a)))
+                area += 0.5 * (
+                    r * r * (b - a) + r * c[0] * (math.sin(b) - math.sin(a)) - r * c[1] * (math.cos(b) - math.cos(a))
+                )
     return max(area, 0.0)
 
 
@@ -100,7 +100,6 @@ def annuli_intersection_area(centres: np.ndarray, r_in: np.ndarray, r_out: np.nd
     for size in range(1, n + 1):
         for subset in itertools.combinations(range(n), size):
             sub = list(subset)
-            inter = discs_intersection_area(np.vstack([centres, centres[sub]]),
-                                            np.concatenate([r_out, r_in[sub]]))
+            inter = discs_intersection_area(np.vstack([centres, centres[sub]]), np.concatenate([r_out, r_in[sub]]))
             area -= (-1) ** (size + 1) * inter
     return max(area, 0.0)

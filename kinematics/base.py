@@ -76,10 +76,7 @@ class Mechanism(ABC):
     def _check_actuators(self, q: np.ndarray) -> np.ndarray:
         arr = np.asarray(q, dtype=float)
         if arr.shape != (self.dof,):
-            raise ValueError(
-                f"{self.name}: actuator vector must have shape ({self.dof},); "
-                f"got shape {np.shape(q)}"
-            )
+            raise ValueError(f"{self.name}: actuator vector must have shape ({self.dof},); got shape {np.shape(q)}")
         return arr
 
     # ------------------------------------------------------------ public API
@@ -182,10 +179,10 @@ class Mechanism(ABC):
         out = np.empty(poses.shape[0])
         ones = np.ones(self.dof)
         for start in range(0, poses.shape[0], CONDITIONING_BLOCK):
-            jac = jacobian_kernel(poses[start:start + CONDITIONING_BLOCK], column_scale)
+            jac = jacobian_kernel(poses[start : start + CONDITIONING_BLOCK], column_scale)
             if jac is None:
                 return None
-            out[start:start + CONDITIONING_BLOCK] = kernels.inverse_condition_batch(jac, ones)
+            out[start : start + CONDITIONING_BLOCK] = kernels.inverse_condition_batch(jac, ones)
         return out
 
     def _compiled_jacobian(self, poses: np.ndarray, column_scale: np.ndarray) -> np.ndarray | None:
@@ -215,8 +212,9 @@ class Mechanism(ABC):
         """
         if not kernels.compiled():
             return None
-        return self._blocked(self._compiled_reachable_jacobian, np.ascontiguousarray(poses, dtype=float),
-                             self.angular_scale(length))
+        return self._blocked(
+            self._compiled_reachable_jacobian, np.ascontiguousarray(poses, dtype=float), self.angular_scale(length)
+        )
 
     def _compiled_reachable_jacobian(self, poses: np.ndarray, column_scale: np.ndarray) -> np.ndarray | None:
         """Optional compiled ``jacobian(poses) * column_scale`` (N, dof, dof) with NaN rows
@@ -251,11 +249,11 @@ class Mechanism(ABC):
 
     # ------------------------------------------------ workspace description
     #: design variables (name, lower, upper, unit) for :meth:`from_design`
-    design_variables: ClassVar[tuple["DesignVariable", ...]] = ()
+    design_variables: ClassVar[tuple[DesignVariable, ...]] = ()
     #: constructor parameters that are not design variables (the pipeline's ``mechanism.fixed``;
     #: readings of the paper are among them): default, allowed range or choices, unit. Required for
     #: every such parameter; the pipeline refuses a value outside it before any work
-    fixed_parameters: ClassVar[tuple["FixedParameter", ...]] = ()
+    fixed_parameters: ClassVar[tuple[FixedParameter, ...]] = ()
     #: ``{name: default}`` of :attr:`fixed_parameters` (derived from them when a class declares them)
     default_fixed: ClassVar[dict[str, object]] = {}
     #: constructor parameters given in degrees (all other numbers are lengths in
@@ -271,7 +269,7 @@ class Mechanism(ABC):
     min_resolution: ClassVar[int] = 8
 
     @classmethod
-    def from_design(cls, design: np.ndarray, **fixed: object) -> "Mechanism":
+    def from_design(cls, design: np.ndarray, **fixed: object) -> Mechanism:
         """Build the mechanism of a design vector (see :attr:`design_variables`).
 
         The default maps each design variable to the constructor parameter
@@ -302,8 +300,7 @@ class Mechanism(ABC):
         range is a single value).
         """
 
-    def invariant_axis_interval(self, poses: np.ndarray
-                                ) -> tuple[int, np.ndarray, np.ndarray] | None:
+    def invariant_axis_interval(self, poses: np.ndarray) -> tuple[int, np.ndarray, np.ndarray] | None:
         """An axis along which the workspace can be integrated exactly, if any.
 
         Some mechanisms have a translational pose variable along which the
@@ -318,9 +315,9 @@ class Mechanism(ABC):
         """
         return None
 
-    def exact_axis_columns(self, poses: np.ndarray, axis_lo: float, axis_hi: float,
-                           length: float | None = None
-                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    def exact_axis_columns(
+        self, poses: np.ndarray, axis_lo: float, axis_hi: float, length: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """Optional compiled path of the exact-axis integration (see :meth:`invariant_axis_interval`).
 
         A mechanism with an invariant axis may fuse, per pose (N, dof), the
@@ -333,8 +330,7 @@ class Mechanism(ABC):
         """
         return None
 
-    def volume_unit(self, orientation: tuple[float, float] | None = None,
-                    fixed: dict[str, float] | None = None) -> str:
+    def volume_unit(self, orientation: tuple[float, float] | None = None, fixed: dict[str, float] | None = None) -> str:
         """Unit of the workspace volume over the pose variables not in ``fixed``.
 
         E.g. ``"cm³·rad"`` for H4; angular variables count only when the
@@ -410,8 +406,7 @@ class Mechanism(ABC):
         equation), wraps the angles to (-pi, pi] and removes duplicates.
         """
         starts = starts[np.isfinite(starts).all(axis=1)]
-        sols, res = newton_polish(lambda p: self._constraints(p, q),
-                                  lambda p: self._constraints_jacobian(p, q), starts)
+        sols, res = newton_polish(lambda p: self._constraints(p, q), lambda p: self._constraints_jacobian(p, q), starts)
         sols = sols[np.all(np.abs(res) <= 1e-9 * scale, axis=1)]
         angular = np.asarray(self.angular)
         sols[:, angular] = wrap_angle(sols[:, angular])
@@ -461,8 +456,11 @@ class FixedParameter:
 
     def allowed(self) -> str:
         """The allowed values as words, e.g. ``"a number in [1, 1000] cm"``."""
-        text = (f"one of {', '.join(map(str, self.choices))}" if self.choices
-                else f"a number in [{self.lower:g}, {self.upper:g}]{' ' + self.unit if self.unit else ''}")
+        text = (
+            f"one of {', '.join(map(str, self.choices))}"
+            if self.choices
+            else f"a number in [{self.lower:g}, {self.upper:g}]{' ' + self.unit if self.unit else ''}"
+        )
         return f"null or {text}" if self.optional else text
 
     def accepts(self, value: object) -> bool:
@@ -471,8 +469,12 @@ class FixedParameter:
             return self.optional
         if self.choices:
             return any(value == c and type(value) is type(c) for c in self.choices)
-        return (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-                and self.lower <= value <= self.upper)
+        return (
+            isinstance(value, (int, float))
+            and not isinstance(value, bool)
+            and math.isfinite(value)
+            and self.lower <= value <= self.upper
+        )
 
 
 def cosine_range(lo: float, hi: float, phase: np.ndarray | float = 0.0) -> tuple[np.ndarray, np.ndarray]:

@@ -107,8 +107,7 @@ def _ratio(jac: np.ndarray) -> np.ndarray:
         squares = trace * trace - 2.0 * coeffs[2]
         upper = np.minimum(np.where(squares > 0, np.sqrt(np.abs(squares)), trace), trace)
         e_last, e_before = np.abs(coeffs[size]), np.abs(coeffs[size - 1])
-        lower = np.minimum(np.where(e_before > 0, e_last / np.where(e_before > 0, e_before, 1.0), 0.0),
-                           upper)
+        lower = np.minimum(np.where(e_before > 0, e_last / np.where(e_before > 0, e_before, 1.0), 0.0), upper)
         lam_max = _laguerre(coeffs, upper)
         lam_min = _laguerre(coeffs, lower)
         ratio = np.sqrt(np.clip(lam_min, 0.0, None) / lam_max)
@@ -137,7 +136,7 @@ def _det(m: list[list[np.ndarray]], rows: tuple[int, ...], cols: tuple[int, ...]
         return m[rows[0]][cols[0]]
     total = 0.0
     for k, c in enumerate(cols):
-        minor = _det(m, rows[1:], cols[:k] + cols[k + 1:])
+        minor = _det(m, rows[1:], cols[:k] + cols[k + 1 :])
         total = total + (-1) ** k * m[rows[0]][c] * minor
     return total
 

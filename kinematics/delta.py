@@ -89,8 +89,17 @@ class Delta(Mechanism):
         DesignVariable("forearm_ratio", 1.2, 3.0, "lb / la"),
     )
 
-    def __init__(self, R: float, r: float, la: float, lb: float, theta_min: float = -40.0,
-                 theta_max: float = 80.0, passive_limit: float = 45.0, z_max: float = 0.0) -> None:
+    def __init__(
+        self,
+        R: float,
+        r: float,
+        la: float,
+        lb: float,
+        theta_min: float = -40.0,
+        theta_max: float = 80.0,
+        passive_limit: float = 45.0,
+        z_max: float = 0.0,
+    ) -> None:
         owner = "Delta"
         self.r, self.R = check_range(owner, "r", r, "R", R)
         self.la = check_positive(owner, "la", la)
@@ -98,25 +107,39 @@ class Delta(Mechanism):
         try:
             lo, hi, top = float(theta_min), float(theta_max), float(z_max)
         except (TypeError, ValueError):
-            raise ValueError(f"Delta: parameters 'theta_min', 'theta_max' (deg) and 'z_max' (mm) must be numbers; "
-                             f"got {theta_min!r}, {theta_max!r}, {z_max!r}") from None
+            raise ValueError(
+                f"Delta: parameters 'theta_min', 'theta_max' (deg) and 'z_max' (mm) must be numbers; "
+                f"got {theta_min!r}, {theta_max!r}, {z_max!r}"
+            ) from None
         if not (math.isfinite(lo) and math.isfinite(hi) and -180 < lo < hi < 180):
-            raise ValueError(f"Delta: parameters 'theta_min' < 'theta_max' must lie in (-180, 180) deg; "
-                             f"got {theta_min!r}, {theta_max!r}")
+            raise ValueError(
+                f"Delta: parameters 'theta_min' < 'theta_max' must lie in (-180, 180) deg; "
+                f"got {theta_min!r}, {theta_max!r}"
+            )
         self.theta_min, self.theta_max = lo, hi
         self.passive_limit = check_positive(owner, "passive_limit", passive_limit)
         if self.passive_limit > 90:
             raise ValueError(f"Delta: parameter 'passive_limit' must be in (0, 90] deg; got {passive_limit!r}")
         self.z_max = top
         if not -(self.la + self.lb) < top <= 0.0:
-            raise ValueError(f"Delta: parameter 'z_max' must be in ({-(self.la + self.lb):g}, 0] mm "
-                             f"(-(la + lb) to the base plane); got {z_max!r}")
-        self._params = {"R": self.R, "r": self.r, "la": self.la, "lb": self.lb, "theta_min": lo,
-                        "theta_max": hi, "passive_limit": self.passive_limit, "z_max": self.z_max}
+            raise ValueError(
+                f"Delta: parameter 'z_max' must be in ({-(self.la + self.lb):g}, 0] mm "
+                f"(-(la + lb) to the base plane); got {z_max!r}"
+            )
+        self._params = {
+            "R": self.R,
+            "r": self.r,
+            "la": self.la,
+            "lb": self.lb,
+            "theta_min": lo,
+            "theta_max": hi,
+            "passive_limit": self.passive_limit,
+            "z_max": self.z_max,
+        }
         self._cos, self._sin = np.cos(_AZIMUTH), np.sin(_AZIMUTH)
 
     @classmethod
-    def from_design(cls, design: np.ndarray, **fixed: object) -> "Delta":
+    def from_design(cls, design: np.ndarray, **fixed: object) -> Delta:
         """``(r / R, lb / la)`` at the fixed ``R`` and ``la`` (mm)."""
         fixed = dict(fixed)
         r_ratio, forearm_ratio = (float(v) for v in np.ravel(design))
@@ -196,8 +219,9 @@ class Delta(Mechanism):
         fx, fy, fz, cq, sq = self._closure(poses, q)
         u, _, z = self._leg_frame(poses)
         d_theta = 2.0 * self.la * (u * sq + z * cq)  # dF_i / dtheta_i
-        grad = np.stack([2.0 * (fx * self._cos - fy * self._sin), 2.0 * (fx * self._sin + fy * self._cos),
-                         2.0 * fz], axis=-1)  # dF_i / d(x, y, z), base frame
+        grad = np.stack(
+            [2.0 * (fx * self._cos - fy * self._sin), 2.0 * (fx * self._sin + fy * self._cos), 2.0 * fz], axis=-1
+        )  # dF_i / d(x, y, z), base frame
         with np.errstate(divide="ignore", invalid="ignore"):
             return -grad / d_theta[..., None]
 
@@ -205,8 +229,18 @@ class Delta(Mechanism):
         """IK, actuator range, forearm limit and ``J`` of :meth:`_jacobian`, compiled
         (see :func:`_delta_reachable_jacobians`)."""
         lo, hi = math.radians(self.theta_min), math.radians(self.theta_max)
-        return _delta_reachable_jacobians(poses, self._cos, self._sin, self.R - self.r, self.la, self.lb, lo, hi,
-                                          self.lb * math.sin(math.radians(self.passive_limit)), column_scale)
+        return _delta_reachable_jacobians(
+            poses,
+            self._cos,
+            self._sin,
+            self.R - self.r,
+            self.la,
+            self.lb,
+            lo,
+            hi,
+            self.lb * math.sin(math.radians(self.passive_limit)),
+            column_scale,
+        )
 
     def _constraints(self, poses: np.ndarray, q: np.ndarray) -> np.ndarray:
         """``|forearm_i|^2 - lb^2`` (mm^2), zero at a solution for ``q``."""
@@ -215,8 +249,9 @@ class Delta(Mechanism):
 
     def _constraints_jacobian(self, poses: np.ndarray, q: np.ndarray) -> np.ndarray:
         fx, fy, fz, _, _ = self._closure(poses, q)
-        return np.stack([2.0 * (fx * self._cos - fy * self._sin), 2.0 * (fx * self._sin + fy * self._cos),
-                         2.0 * fz], axis=-1)
+        return np.stack(
+            [2.0 * (fx * self._cos - fy * self._sin), 2.0 * (fx * self._sin + fy * self._cos), 2.0 * fz], axis=-1
+        )
 
     def sphere_centres(self, q: np.ndarray) -> np.ndarray:
         """Centres ``E_i - r e_i`` (3, 3) of the spheres of radius ``lb`` the platform centre lies on (mm)."""
@@ -280,8 +315,7 @@ def _delta_reachable_jacobians(poses, cos_az, sin_az, offset, la, lb, theta_lo, 
             fx = u - la * cq
             fz = z + la * sq
             d_theta = 2.0 * la * (u * sq + z * cq)
-            grads = (2.0 * (fx * cos_az[i] - y_leg * sin_az[i]), 2.0 * (fx * sin_az[i] + y_leg * cos_az[i]),
-                     2.0 * fz)
+            grads = (2.0 * (fx * cos_az[i] - y_leg * sin_az[i]), 2.0 * (fx * sin_az[i] + y_leg * cos_az[i]), 2.0 * fz)
             for j in range(3):
                 g = -grads[j]
                 if d_theta != 0.0:

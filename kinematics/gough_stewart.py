@@ -108,9 +108,14 @@ _PLATFORM_SIGNS = np.array([1.0, -1.0, 1.0, -1.0, 1.0, -1.0])
 def _hat(w: np.ndarray) -> np.ndarray:
     """Skew matrices (N, 3, 3) of vectors (N, 3): ``hat(w) v = w x v``."""
     zero = np.zeros(w.shape[0])
-    return np.stack([np.stack([zero, -w[:, 2], w[:, 1]], axis=-1),
-                     np.stack([w[:, 2], zero, -w[:, 0]], axis=-1),
-                     np.stack([-w[:, 1], w[:, 0], zero], axis=-1)], axis=-2)
+    return np.stack(
+        [
+            np.stack([zero, -w[:, 2], w[:, 1]], axis=-1),
+            np.stack([w[:, 2], zero, -w[:, 0]], axis=-1),
+            np.stack([-w[:, 1], w[:, 0], zero], axis=-1),
+        ],
+        axis=-2,
+    )
 
 
 def _tilt_terms(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -147,8 +152,9 @@ def rotation(poses: np.ndarray) -> np.ndarray:
     tilt = np.eye(3) + a[:, None, None] * hat + b[:, None, None] * (hat @ hat)  # Rodrigues
     cs, sn = np.cos(poses[:, 5]), np.sin(poses[:, 5])
     zero, one = np.zeros_like(cs), np.ones_like(cs)
-    rz = np.stack([np.stack([cs, -sn, zero], -1), np.stack([sn, cs, zero], -1),
-                   np.stack([zero, zero, one], -1)], axis=-2)
+    rz = np.stack(
+        [np.stack([cs, -sn, zero], -1), np.stack([sn, cs, zero], -1), np.stack([zero, zero, one], -1)], axis=-2
+    )
     return tilt @ rz
 
 
@@ -245,10 +251,20 @@ class GoughStewart(Mechanism):
         DesignVariable("height", 550.0, 850.0, "mm"),
     )
 
-    def __init__(self, r_base: float, r_platform: float, sep_base: float, sep_platform: float,
-                 height: float, q_min: float = 600.0, q_max: float = 900.0, cone_base: float = 45.0,
-                 cone_platform: float = 45.0, cone_reference: str = "home",
-                 homogenising: str = "platform") -> None:
+    def __init__(
+        self,
+        r_base: float,
+        r_platform: float,
+        sep_base: float,
+        sep_platform: float,
+        height: float,
+        q_min: float = 600.0,
+        q_max: float = 900.0,
+        cone_base: float = 45.0,
+        cone_platform: float = 45.0,
+        cone_reference: str = "home",
+        homogenising: str = "platform",
+    ) -> None:
         owner = "GoughStewart"
         self.r_base = check_positive(owner, "r_base", r_base)
         self.r_platform = check_positive(owner, "r_platform", r_platform)
@@ -262,17 +278,28 @@ class GoughStewart(Mechanism):
             v = check_positive(owner, name, value)
             if v >= 180.0:
                 raise ValueError(f"{owner}: parameter '{name}' must be in (0, 180) degrees; got {value!r}")
-        for name, value, allowed in (("cone_reference", cone_reference, ("home", "normal")),
-                                     ("homogenising", homogenising, ("platform", "base", "mean"))):
+        for name, value, allowed in (
+            ("cone_reference", cone_reference, ("home", "normal")),
+            ("homogenising", homogenising, ("platform", "base", "mean")),
+        ):
             if value not in allowed:
                 raise ValueError(f"{owner}: parameter '{name}' must be one of {', '.join(allowed)}; got {value!r}")
         self.sep_base, self.sep_platform = float(sep_base), float(sep_platform)
         self.cone_base, self.cone_platform = float(cone_base), float(cone_platform)
         self.cone_reference, self.homogenising = cone_reference, homogenising
-        self._params = {"r_base": self.r_base, "r_platform": self.r_platform, "sep_base": self.sep_base,
-                        "sep_platform": self.sep_platform, "height": self.height, "q_min": self.q_min,
-                        "q_max": self.q_max, "cone_base": self.cone_base, "cone_platform": self.cone_platform,
-                        "cone_reference": cone_reference, "homogenising": homogenising}
+        self._params = {
+            "r_base": self.r_base,
+            "r_platform": self.r_platform,
+            "sep_base": self.sep_base,
+            "sep_platform": self.sep_platform,
+            "height": self.height,
+            "q_min": self.q_min,
+            "q_max": self.q_max,
+            "cone_base": self.cone_base,
+            "cone_platform": self.cone_platform,
+            "cone_reference": cone_reference,
+            "homogenising": homogenising,
+        }
         ang_b = _joint_angles(self.sep_base, _BASE_CENTRES, _BASE_SIGNS)
         ang_p = _joint_angles(self.sep_platform, _PLATFORM_CENTRES, _PLATFORM_SIGNS)
         #: base joints b_i (6, 3), mm, base frame
@@ -300,8 +327,9 @@ class GoughStewart(Mechanism):
         Default ``r_platform``: ``|R p_i|``, the moment arm of every platform joint, so an
         angular column divided by it is the leg speed per unit speed of the joints.
         """
-        return {"platform": self.r_platform, "base": self.r_base,
-                "mean": 0.5 * (self.r_base + self.r_platform)}[self.homogenising]
+        return {"platform": self.r_platform, "base": self.r_base, "mean": 0.5 * (self.r_base + self.r_platform)}[
+            self.homogenising
+        ]
 
     @property
     def actuator_range(self) -> tuple[np.ndarray, np.ndarray]:
@@ -339,8 +367,10 @@ class GoughStewart(Mechanism):
         upper = np.min(self.base @ directions.T + reach + arm, axis=0)
         from_vertical = np.minimum(angle[:, 4] + cone, math.pi / 2)
         z_lo = max(float(np.max(self.q_min * np.cos(from_vertical))) - drop, 0.0)
-        return (np.array([-upper[1], -upper[3], z_lo, lo, lo, lo]),
-                np.array([upper[0], upper[2], max(upper[4], z_lo), hi, hi, hi]))
+        return (
+            np.array([-upper[1], -upper[3], z_lo, lo, lo, lo]),
+            np.array([upper[0], upper[2], max(upper[4], z_lo), hi, hi, hi]),
+        )
 
     def reference_volume(self, orientation: tuple[float, float]) -> float:
         """``V* = pi q_max^3`` times the orientation box's measure (mm^3, or mm^3 rad^3).
@@ -402,8 +432,9 @@ class GoughStewart(Mechanism):
     def within_joint_limits(self, poses: np.ndarray) -> np.ndarray:
         """Every base cone angle ``<= cone_base`` and platform cone angle ``<= cone_platform`` (N,) bool."""
         base, plat = self.cone_angles(poses)
-        return (np.all(base <= math.radians(self.cone_base), axis=1)
-                & np.all(plat <= math.radians(self.cone_platform), axis=1))
+        return np.all(base <= math.radians(self.cone_base), axis=1) & np.all(
+            plat <= math.radians(self.cone_platform), axis=1
+        )
 
     def reachable_inverse_condition(self, poses: np.ndarray, length: float | None = None) -> np.ndarray | None:
         """Compiled membership test (see the base class): IK, leg range, cone limits and
@@ -415,9 +446,18 @@ class GoughStewart(Mechanism):
         poses = np.ascontiguousarray(poses, dtype=float)
         rot = np.ascontiguousarray(rotation(poses[:1])[0]) if _one_orientation(poses) else np.empty((0, 3, 3))
         jac = _reachable_jacobians(
-            poses, rot, np.ascontiguousarray(self.base), np.ascontiguousarray(self.platform),
-            np.ascontiguousarray(self.base_axes), np.ascontiguousarray(self.platform_axes), self.q_min, self.q_max,
-            math.radians(self.cone_base), math.radians(self.cone_platform), self.angular_scale(length))
+            poses,
+            rot,
+            np.ascontiguousarray(self.base),
+            np.ascontiguousarray(self.platform),
+            np.ascontiguousarray(self.base_axes),
+            np.ascontiguousarray(self.platform_axes),
+            self.q_min,
+            self.q_max,
+            math.radians(self.cone_base),
+            math.radians(self.cone_platform),
+            self.angular_scale(length),
+        )
         ic = np.full(poses.shape[0], np.nan)
         inside = np.isfinite(jac[:, 0, 0])
         # 6 x 6: batched LAPACK SVD, the numpy path's own conditioning (the compiled 2-4 x 4 one does
@@ -483,9 +523,14 @@ class GoughStewart(Mechanism):
         (:func:`kinematics.kernels.reference_kernels`); both take the same steps.
         """
         if kernels.compiled():
-            x = _newton_kernel(np.ascontiguousarray(starts, dtype=float), np.ascontiguousarray(q, dtype=float),
-                               np.ascontiguousarray(self.base), np.ascontiguousarray(self.platform),
-                               int(iterations), 10.0 * (self.q_max + self.r_base))
+            x = _newton_kernel(
+                np.ascontiguousarray(starts, dtype=float),
+                np.ascontiguousarray(q, dtype=float),
+                np.ascontiguousarray(self.base),
+                np.ascontiguousarray(self.platform),
+                int(iterations),
+                10.0 * (self.q_max + self.r_base),
+            )
             with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
                 x = canonical_orientation(x)
                 lengths = self._inverse(x)
@@ -584,8 +629,9 @@ class GoughStewart(Mechanism):
 
 
 # ------------------------------------------------------------ workspaces
-def constant_orientation_workspace(mech: GoughStewart, tilt_x: float = 0.0, tilt_y: float = 0.0,
-                                   torsion: float = 0.0, **options):
+def constant_orientation_workspace(
+    mech: GoughStewart, tilt_x: float = 0.0, tilt_y: float = 0.0, torsion: float = 0.0, **options
+):
     """Constant-orientation workspace: the mm^3 volume over (x, y, z) at one orientation (rad).
 
     ``options`` go to :func:`kinematics.workspace.evaluate` (resolution,
@@ -601,8 +647,12 @@ def constant_orientation_workspace(mech: GoughStewart, tilt_x: float = 0.0, tilt
     return replace(ev, reference_volume=reference, suri=ev.volume / reference)
 
 
-def orientation_workspace(mech: GoughStewart, position: tuple[float, float, float],
-                          orientation: tuple[float, float] = (-np.pi / 2, np.pi / 2), **options):
+def orientation_workspace(
+    mech: GoughStewart,
+    position: tuple[float, float, float],
+    orientation: tuple[float, float] = (-np.pi / 2, np.pi / 2),
+    **options,
+):
     """Orientation workspace at a fixed platform centre ``position`` (mm): the rad^3 volume over
     (tilt_x, tilt_y, torsion) within the box ``orientation`` (rad) on every angle.
 
@@ -641,9 +691,16 @@ class QuasiMonteCarloVolume:
     unit: str = "mm³·rad³"
 
 
-def workspace_6d(mech: GoughStewart, orientation: tuple[float, float] = (-np.radians(15), np.radians(15)),
-                 n_points: int = 2**14, replicates: int = 8, seed: int = 0, confidence: float = 0.95,
-                 min_inverse_condition: float = 0.01, length: float | None = None) -> QuasiMonteCarloVolume:
+def workspace_6d(
+    mech: GoughStewart,
+    orientation: tuple[float, float] = (-np.radians(15), np.radians(15)),
+    n_points: int = 2**14,
+    replicates: int = 8,
+    seed: int = 0,
+    confidence: float = 0.95,
+    min_inverse_condition: float = 0.01,
+    length: float | None = None,
+) -> QuasiMonteCarloVolume:
     """6-D workspace volume and GDI by randomised quasi-Monte-Carlo.
 
     Samples ``replicates`` independently scrambled Sobol sets of ``n_points``
@@ -684,11 +741,19 @@ def workspace_6d(mech: GoughStewart, orientation: tuple[float, float] = (-np.rad
         half = tq * values.std(ddof=1) / math.sqrt(len(values))
         return float(values.mean() - half), float(values.mean() + half)
 
-    return QuasiMonteCarloVolume(volume=float(volumes.mean()), volume_ci=interval(volumes),
-                                 gdi=float(gdis.mean()), gdi_ci=interval(gdis),
-                                 fraction=float(volumes.mean() / box), box_lower=tuple(map(float, lo)),
-                                 box_upper=tuple(map(float, hi)), box_volume=box, n_points=int(n_points),
-                                 replicates=int(replicates), confidence=float(confidence))
+    return QuasiMonteCarloVolume(
+        volume=float(volumes.mean()),
+        volume_ci=interval(volumes),
+        gdi=float(gdis.mean()),
+        gdi_ci=interval(gdis),
+        fraction=float(volumes.mean() / box),
+        box_lower=tuple(map(float, lo)),
+        box_upper=tuple(map(float, hi)),
+        box_volume=box,
+        n_points=int(n_points),
+        replicates=int(replicates),
+        confidence=float(confidence),
+    )
 
 
 @kernels.jit
@@ -820,8 +885,9 @@ def _rotation_and_rate_map(a, b, torsion, rot, rate):
 
 
 @kernels.jit
-def _reachable_jacobians(poses, one_rotation, base, platform, base_axes, platform_axes, q_min, q_max,
-                                  cone_base, cone_platform, column_scale):
+def _reachable_jacobians(
+    poses, one_rotation, base, platform, base_axes, platform_axes, q_min, q_max, cone_base, cone_platform, column_scale
+):
     """Per pose (N, 6) (mm, rad): legs ``c + R p_i - b_i`` (:meth:`GoughStewart._inverse`) within
     ``q_min..q_max`` (mm), cone angles (rad) within ``cone_base`` / ``cone_platform``
     (:meth:`GoughStewart.within_joint_limits`), and ``J diag(column_scale)`` with the rows of
@@ -857,8 +923,10 @@ def _reachable_jacobians(poses, one_rotation, base, platform, base_axes, platfor
             my = rot[1, 0] * platform_axes[i, 0] + rot[1, 1] * platform_axes[i, 1] + rot[1, 2] * platform_axes[i, 2]
             mz = rot[2, 0] * platform_axes[i, 0] + rot[2, 1] * platform_axes[i, 1] + rot[2, 2] * platform_axes[i, 2]
             cos_plat = ux * mx + uy * my + uz * mz
-            if not (math.acos(min(max(cos_base, -1.0), 1.0)) <= cone_base
-                    and math.acos(min(max(cos_plat, -1.0), 1.0)) <= cone_platform):
+            if not (
+                math.acos(min(max(cos_base, -1.0), 1.0)) <= cone_base
+                and math.acos(min(max(cos_plat, -1.0), 1.0)) <= cone_platform
+            ):
                 ok = False
                 break
             wx, wy, wz = ay * uz - az * uy, az * ux - ax * uz, ax * uy - ay * ux

@@ -58,7 +58,6 @@ import numpy as np
 
 from kinematics import kernels
 from kinematics.algebra import real_tan_half_angles, trig_polynomial_in_tan_half
-from kinematics.rows import row_all, row_max, row_min
 from kinematics.base import (
     DesignVariable,
     FixedParameter,
@@ -67,6 +66,7 @@ from kinematics.base import (
     cosine_range,
     orientation_measure,
 )
+from kinematics.rows import row_all, row_max, row_min
 
 _SIGN_P = np.array([-1.0, -1.0, 1.0, 1.0])
 _SIGN_Q = np.array([-1.0, 1.0, 1.0, -1.0])
@@ -124,9 +124,17 @@ class H4(Mechanism):
     default_nodes = 24**3
     min_resolution = 12
 
-    def __init__(self, d: float, h: float, Qz: float, stroke: float = 100.0,
-                 base: str = "scaled", ball_joint_limit: float | None = None, homogenising: str = "h",
-                 v_star: str = "prism_theta") -> None:
+    def __init__(
+        self,
+        d: float,
+        h: float,
+        Qz: float,
+        stroke: float = 100.0,
+        base: str = "scaled",
+        ball_joint_limit: float | None = None,
+        homogenising: str = "h",
+        v_star: str = "prism_theta",
+    ) -> None:
         owner = "H4"
         self.d = check_positive(owner, "d", d)
         self.h = check_positive(owner, "h", h)
@@ -138,18 +146,28 @@ class H4(Mechanism):
         if ball_joint_limit is not None:
             ball_joint_limit = check_positive(owner, "ball_joint_limit", ball_joint_limit)
             if ball_joint_limit >= 90.0:
-                raise ValueError(f"H4: parameter 'ball_joint_limit' must be in (0, 90) deg or None; "
-                                 f"got {ball_joint_limit!r}")
+                raise ValueError(
+                    f"H4: parameter 'ball_joint_limit' must be in (0, 90) deg or None; got {ball_joint_limit!r}"
+                )
         self.ball_joint_limit = ball_joint_limit
-        for name, value, allowed in (("homogenising", homogenising, HOMOGENISING_READINGS),
-                                     ("v_star", v_star, V_STAR_READINGS)):
+        for name, value, allowed in (
+            ("homogenising", homogenising, HOMOGENISING_READINGS),
+            ("v_star", v_star, V_STAR_READINGS),
+        ):
             if value not in allowed:
                 raise ValueError(f"H4: parameter '{name}' must be one of {', '.join(allowed)}; got {value!r}")
         self.homogenising = homogenising
         self.v_star = v_star
-        self._params = {"d": self.d, "h": self.h, "Qz": self.Qz, "stroke": self.stroke,
-                        "base": self.base, "ball_joint_limit": self.ball_joint_limit,
-                        "homogenising": self.homogenising, "v_star": self.v_star}
+        self._params = {
+            "d": self.d,
+            "h": self.h,
+            "Qz": self.Qz,
+            "stroke": self.stroke,
+            "base": self.base,
+            "ball_joint_limit": self.ball_joint_limit,
+            "homogenising": self.homogenising,
+            "v_star": self.v_star,
+        }
         self.P = self.h * _SIGN_P
         self.Q = self.d * _SIGN_Q
         if base == "tracking":
@@ -171,13 +189,12 @@ class H4(Mechanism):
     )
 
     @classmethod
-    def from_design(cls, design: np.ndarray, **fixed: object) -> "H4":
+    def from_design(cls, design: np.ndarray, **fixed: object) -> H4:
         """H4 of the scaled design vector ``(d, h, Qz) / stroke`` of seed 000 Sec. 4.4."""
         fixed = dict(fixed)
         stroke = float(fixed.pop("stroke", 100.0))
         d_ratio, h_ratio, qz_ratio = (float(v) for v in np.ravel(design))
-        return cls(d=d_ratio * stroke, h=h_ratio * stroke, Qz=qz_ratio * stroke,
-                   stroke=stroke, **fixed)
+        return cls(d=d_ratio * stroke, h=h_ratio * stroke, Qz=qz_ratio * stroke, stroke=stroke, **fixed)
 
     # ---------------------------------------------------------- properties
     @property
@@ -211,16 +228,17 @@ class H4(Mechanism):
         smin, smax = (float(v) for v in cosine_range(lo, hi, -np.pi / 2))
         # per leg on Python floats (four legs: numpy's per-call overhead would dominate)
         x_lo, x_hi, y_lo, y_hi = [], [], [], []
-        for a, b, p, q, m in zip(self.a.tolist(), self.b.tolist(), self.P.tolist(), self.Q.tolist(),
-                                 self.M.tolist()):
+        for a, b, p, q, m in zip(self.a.tolist(), self.b.tolist(), self.P.tolist(), self.Q.tolist(), self.M.tolist()):
             px = (p * cmin, p * cmax)  # extremes of P_i cos(theta)
             py = (p * smin, p * smax)
             x_lo.append(a - m - max(px))
             x_hi.append(a + m - min(px))
             y_lo.append(b - q - m - max(py))
             y_hi.append(b - q + m - min(py))
-        return (np.array([max(x_lo), max(y_lo), -float(self.M.min()), lo]),
-                np.array([min(x_hi), min(y_hi), self.stroke, hi]))
+        return (
+            np.array([max(x_lo), max(y_lo), -float(self.M.min()), lo]),
+            np.array([min(x_hi), min(y_hi), self.stroke, hi]),
+        )
 
     def reference_volume(self, orientation: tuple[float, float]) -> float:
         """``V* = area(base) * z reach * theta range`` (cm^3 rad), seed 000 Sec. 4.3.
@@ -252,9 +270,9 @@ class H4(Mechanism):
         reachable = row_all(np.isfinite(drop))
         return 2, np.where(reachable, lower, np.inf), np.where(reachable, upper, -np.inf)
 
-    def exact_axis_columns(self, poses: np.ndarray, axis_lo: float, axis_hi: float,
-                           length: float | None = None
-                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    def exact_axis_columns(
+        self, poses: np.ndarray, axis_lo: float, axis_hi: float, length: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """Compiled fused path of :meth:`invariant_axis_interval` + membership (z exact).
 
         Per (x, y, theta) pose, one pass: the feasible z interval of eq. 11
@@ -273,17 +291,36 @@ class H4(Mechanism):
         else:
             reach = self.M * np.sin(np.radians(self.ball_joint_limit))
         cos_theta, sin_theta = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 3]))
-        lower, upper, jac, rows = _h4_columns(np.ascontiguousarray(poses), cos_theta, sin_theta, self.a, self.b,
-                                              self.P, self.Q, self.M, self.stroke, float(axis_lo), float(axis_hi),
-                                              self.angular_scale(length), reach)
+        lower, upper, jac, rows = _h4_columns(
+            np.ascontiguousarray(poses),
+            cos_theta,
+            sin_theta,
+            self.a,
+            self.b,
+            self.P,
+            self.Q,
+            self.M,
+            self.stroke,
+            float(axis_lo),
+            float(axis_hi),
+            self.angular_scale(length),
+            reach,
+        )
         ic = np.full(poses.shape[0], np.nan)
         ic[rows] = kernels.inverse_condition_batch(jac, np.ones(4))
         return lower, upper, ic
 
     def _compiled_jacobian(self, poses: np.ndarray, column_scale: np.ndarray) -> np.ndarray:
         """Eq. 33's Jacobian times ``diag(column_scale)``, compiled (see :func:`_h4_jacobians`)."""
-        return _h4_jacobians(np.ascontiguousarray(poses), self.a, self.b, self.P, self.Q, self.M,
-                             np.ascontiguousarray(column_scale, dtype=float))
+        return _h4_jacobians(
+            np.ascontiguousarray(poses),
+            self.a,
+            self.b,
+            self.P,
+            self.Q,
+            self.M,
+            np.ascontiguousarray(column_scale, dtype=float),
+        )
 
     def within_joint_limits(self, poses: np.ndarray) -> np.ndarray:
         """Rod-to-vertical angle within ``ball_joint_limit`` (N,) bool; all True without a limit.
@@ -382,8 +419,13 @@ class H4(Mechanism):
         k = gx**2 + gy**2 + q**2 - self.M**2
         pairs = [(1, 0), (3, 2), (2, 0)]
         mat = np.stack(
-            [np.stack([2 * (gx[:, j] - gx[:, i]), 2 * (gy[:, j] - gy[:, i]),
-                       np.full_like(theta, -2 * (q[j] - q[i]))], axis=-1) for j, i in pairs],
+            [
+                np.stack(
+                    [2 * (gx[:, j] - gx[:, i]), 2 * (gy[:, j] - gy[:, i]), np.full_like(theta, -2 * (q[j] - q[i]))],
+                    axis=-1,
+                )
+                for j, i in pairs
+            ],
             axis=1,
         )
         rhs = np.stack([-(k[:, j] - k[:, i]) for j, i in pairs], axis=1)
@@ -435,7 +477,6 @@ class H4(Mechanism):
             return np.empty((0, 4))
         num, den, *_ = self._linear_position(theta, q)
         return self._polish(np.column_stack([num / den[:, None], theta]), q, self.M**2)
-
 
 
 @kernels.inline_jit

@@ -59,8 +59,9 @@ def compiled() -> bool:
         return _forced[-1] == "numba"
     choice = os.environ.get(KERNELS_ENV, "numba").strip().lower() or "numba"
     if choice not in KERNEL_CHOICES:
-        raise ValueError(f"environment variable {KERNELS_ENV} must be one of "
-                         f"{', '.join(KERNEL_CHOICES)}; got {choice!r}")
+        raise ValueError(
+            f"environment variable {KERNELS_ENV} must be one of {', '.join(KERNEL_CHOICES)}; got {choice!r}"
+        )
     return choice == "numba"
 
 
@@ -156,8 +157,9 @@ def _batch_2x2(jac, column_scale):
     m = np.empty((2, 2))
     for p in range(jac.shape[0]):
         kind = _scaled_copy(jac, p, column_scale, m)
-        out[p] = (_inverse_condition_2x2(m[0, 0], m[0, 1], m[1, 0], m[1, 1]) if kind == 0
-                  else (np.nan if kind == 1 else 0.0))
+        out[p] = (
+            _inverse_condition_2x2(m[0, 0], m[0, 1], m[1, 0], m[1, 1]) if kind == 0 else (np.nan if kind == 1 else 0.0)
+        )
     return out
 
 
@@ -208,21 +210,39 @@ def _coefficients_4x4(jac, p, column_scale):
     g23 = m02 * m03 + m12 * m13 + m22 * m23 + m32 * m33
     g33 = m03 * m03 + m13 * m13 + m23 * m23 + m33 * m33
     trace = g00 + g11 + g22 + g33
-    e2 = ((g00 * g11 - g01 * g01) + (g00 * g22 - g02 * g02) + (g00 * g33 - g03 * g03)
-          + (g11 * g22 - g12 * g12) + (g11 * g33 - g13 * g13) + (g22 * g33 - g23 * g23))
+    e2 = (
+        (g00 * g11 - g01 * g01)
+        + (g00 * g22 - g02 * g02)
+        + (g00 * g33 - g03 * g03)
+        + (g11 * g22 - g12 * g12)
+        + (g11 * g33 - g13 * g13)
+        + (g22 * g33 - g23 * g23)
+    )
     # 2 x 2 minors shared by the four principal 3 x 3 minors (Laplace on their first row)
     q12 = g11 * g22 - g12 * g12
     q13 = g11 * g33 - g13 * g13
     q23 = g22 * g33 - g23 * g23
-    e3 = (g00 * q12 - g01 * (g01 * g22 - g12 * g02) + g02 * (g01 * g12 - g11 * g02)
-          + g00 * q13 - g01 * (g01 * g33 - g13 * g03) + g03 * (g01 * g13 - g11 * g03)
-          + g00 * q23 - g02 * (g02 * g33 - g23 * g03) + g03 * (g02 * g23 - g22 * g03)
-          + g11 * q23 - g12 * (g12 * g33 - g23 * g13) + g13 * (g12 * g23 - g22 * g13))
+    e3 = (
+        g00 * q12
+        - g01 * (g01 * g22 - g12 * g02)
+        + g02 * (g01 * g12 - g11 * g02)
+        + g00 * q13
+        - g01 * (g01 * g33 - g13 * g03)
+        + g03 * (g01 * g13 - g11 * g03)
+        + g00 * q23
+        - g02 * (g02 * g33 - g23 * g03)
+        + g03 * (g02 * g23 - g22 * g03)
+        + g11 * q23
+        - g12 * (g12 * g33 - g23 * g13)
+        + g13 * (g12 * g23 - g22 * g13)
+    )
     # det(m) by Laplace on row 0 (the 3 x 3 minors of rows 1-3 by Laplace on their first row)
-    det = (m00 * (m11 * (m22 * m33 - m23 * m32) - m12 * (m21 * m33 - m23 * m31) + m13 * (m21 * m32 - m22 * m31))
-           - m01 * (m10 * (m22 * m33 - m23 * m32) - m12 * (m20 * m33 - m23 * m30) + m13 * (m20 * m32 - m22 * m30))
-           + m02 * (m10 * (m21 * m33 - m23 * m31) - m11 * (m20 * m33 - m23 * m30) + m13 * (m20 * m31 - m21 * m30))
-           - m03 * (m10 * (m21 * m32 - m22 * m31) - m11 * (m20 * m32 - m22 * m30) + m12 * (m20 * m31 - m21 * m30)))
+    det = (
+        m00 * (m11 * (m22 * m33 - m23 * m32) - m12 * (m21 * m33 - m23 * m31) + m13 * (m21 * m32 - m22 * m31))
+        - m01 * (m10 * (m22 * m33 - m23 * m32) - m12 * (m20 * m33 - m23 * m30) + m13 * (m20 * m32 - m22 * m30))
+        + m02 * (m10 * (m21 * m33 - m23 * m31) - m11 * (m20 * m33 - m23 * m30) + m13 * (m20 * m31 - m21 * m30))
+        - m03 * (m10 * (m21 * m32 - m22 * m31) - m11 * (m20 * m32 - m22 * m30) + m12 * (m20 * m31 - m21 * m30))
+    )
     return -trace, e2, -e3, det * det
 
 
@@ -323,7 +343,7 @@ def _batch_laguerre(jac, column_scale, degree):
     m = np.empty((degree, degree))
     for start in range(0, count, BLOCK):
         size = min(BLOCK, count - start)
-        _coefficient_pass(jac[start:start + size], column_scale, degree, work)
+        _coefficient_pass(jac[start : start + size], column_scale, degree, work)
         kept = 0
         for k in range(size):
             # classified as _scaled_copy does; a finite trace of G means finite entries
@@ -337,10 +357,9 @@ def _batch_laguerre(jac, column_scale, degree):
             done_max[kept] = done_min[kept] = 0
             kept += 1
         for _ in range(LAGUERRE_STEPS):
-            active = (_laguerre_pass(c1[:kept], c2[:kept], c3[:kept], c4[:kept], degree, x_max[:kept],
-                                     done_max[:kept])
-                      + _laguerre_pass(c1[:kept], c2[:kept], c3[:kept], c4[:kept], degree, x_min[:kept],
-                                       done_min[:kept]))
+            active = _laguerre_pass(
+                c1[:kept], c2[:kept], c3[:kept], c4[:kept], degree, x_max[:kept], done_max[:kept]
+            ) + _laguerre_pass(c1[:kept], c2[:kept], c3[:kept], c4[:kept], degree, x_min[:kept], done_min[:kept])
             if active == 0:
                 break
         for k in range(kept):

@@ -76,14 +76,17 @@ def check_mechanism_class(obj: object, where: str) -> type[Mechanism]:
         raise PluginError(f"{where}: {obj.__qualname__} is abstract (does not implement {missing})")
     name = getattr(obj, "name", None)
     if not (isinstance(name, str) and name.isidentifier()):
-        raise PluginError(f"{where}: {obj.__qualname__}.name must be a Python identifier string "
-                          f"(the registry and Hydra option name); got {name!r}")
+        raise PluginError(
+            f"{where}: {obj.__qualname__}.name must be a Python identifier string "
+            f"(the registry and Hydra option name); got {name!r}"
+        )
     return obj
 
 
-def entry_point_mechanisms(builtins: Mapping[str, type[Mechanism]],
-                           entry_points: Iterable[importlib.metadata.EntryPoint] | None = None,
-                           ) -> dict[str, type[Mechanism]]:
+def entry_point_mechanisms(
+    builtins: Mapping[str, type[Mechanism]],
+    entry_points: Iterable[importlib.metadata.EntryPoint] | None = None,
+) -> dict[str, type[Mechanism]]:
     """Load the external mechanisms declared in the entry-point group :data:`ENTRY_POINT_GROUP`.
 
     Parameters
@@ -115,9 +118,11 @@ def entry_point_mechanisms(builtins: Mapping[str, type[Mechanism]],
         where = _describe(ep)
         if ep.name in builtins:
             builtin = builtins[ep.name]
-            raise PluginError(f"{where}: name '{ep.name}' is the built-in mechanism "
-                              f"{builtin.__module__}:{builtin.__qualname__}; rename the entry point "
-                              f"and its class's name")
+            raise PluginError(
+                f"{where}: name '{ep.name}' is the built-in mechanism "
+                f"{builtin.__module__}:{builtin.__qualname__}; rename the entry point "
+                f"and its class's name"
+            )
         if ep.name in found:
             raise PluginError(f"{where}: name '{ep.name}' is also declared by {origin[ep.name]}")
         try:
@@ -126,8 +131,7 @@ def entry_point_mechanisms(builtins: Mapping[str, type[Mechanism]],
             raise PluginError(f"{where}: cannot load: {one_line(exc)}") from None
         cls = check_mechanism_class(obj, where)
         if cls.name != ep.name:
-            raise PluginError(f"{where}: the entry point's name must equal {cls.__qualname__}.name "
-                              f"({cls.name!r})")
+            raise PluginError(f"{where}: the entry point's name must equal {cls.__qualname__}.name ({cls.name!r})")
         found[ep.name] = cls
         origin[ep.name] = where
     return dict(sorted(found.items()))
@@ -143,15 +147,21 @@ def load_class(path: str) -> type[Mechanism]:
         missing class, or not a concrete Mechanism subclass.
     """
     module_name, sep, attr = str(path).partition(":")
-    if not (sep and module_name and attr and all(p.isidentifier() for p in module_name.split("."))
-            and all(p.isidentifier() for p in attr.split("."))):
+    if not (
+        sep
+        and module_name
+        and attr
+        and all(p.isidentifier() for p in module_name.split("."))
+        and all(p.isidentifier() for p in attr.split("."))
+    ):
         raise PluginError(f"mechanism path {path!r}: expected 'package.module:Class'")
     try:
         obj = importlib.import_module(module_name)
     except ModuleNotFoundError as exc:
         if exc.name is not None and (module_name + ".").startswith(exc.name + "."):
-            raise PluginError(f"mechanism path {path!r}: no module named {exc.name!r} "
-                              f"(is its package installed in this environment?)") from None
+            raise PluginError(
+                f"mechanism path {path!r}: no module named {exc.name!r} (is its package installed in this environment?)"
+            ) from None
         raise PluginError(f"mechanism path {path!r}: cannot import {module_name!r}: {one_line(exc)}") from None
     except Exception as exc:  # third-party import-time errors become one line naming the path
         raise PluginError(f"mechanism path {path!r}: cannot import {module_name!r}: {one_line(exc)}") from None
@@ -180,13 +190,16 @@ def resolve_mechanism(name_or_path: str, registry: Mapping[str, type[Mechanism]]
         try:
             return registry[name_or_path]
         except KeyError:
-            raise PluginError(f"unknown mechanism {name_or_path!r}; allowed: {', '.join(registry)} "
-                              f"or 'package.module:Class'") from None
+            raise PluginError(
+                f"unknown mechanism {name_or_path!r}; allowed: {', '.join(registry)} or 'package.module:Class'"
+            ) from None
     cls = load_class(name_or_path)
     registered = registry.get(cls.name)
     if registered is not None and registered is not cls:
-        raise PluginError(f"mechanism path {name_or_path!r}: its name {cls.name!r} is taken by "
-                          f"{registered.__module__}:{registered.__qualname__}")
+        raise PluginError(
+            f"mechanism path {name_or_path!r}: its name {cls.name!r} is taken by "
+            f"{registered.__module__}:{registered.__qualname__}"
+        )
     return cls
 
 
@@ -215,11 +228,22 @@ def config_search_paths(entry_points: Iterable[importlib.metadata.EntryPoint] | 
         except (ImportError, ValueError) as exc:
             raise PluginError(f"{where}: cannot find package {ep.value!r}: {one_line(exc)}") from None
         if spec is None or spec.submodule_search_locations is None:
-            raise PluginError(f"{where}: {ep.value!r} is not an importable package "
-                              f"(a folder with an __init__.py, shipped with the distribution)")
+            raise PluginError(
+                f"{where}: {ep.value!r} is not an importable package "
+                f"(a folder with an __init__.py, shipped with the distribution)"
+            )
         paths.append(f"pkg://{ep.value}")
     return paths
 
 
-__all__ = ["CONFIG_ENTRY_POINT_GROUP", "ENTRY_POINT_GROUP", "PluginError", "check_mechanism_class",
-           "config_search_paths", "entry_point_mechanisms", "load_class", "one_line", "resolve_mechanism"]
+__all__ = [
+    "CONFIG_ENTRY_POINT_GROUP",
+    "ENTRY_POINT_GROUP",
+    "PluginError",
+    "check_mechanism_class",
+    "config_search_paths",
+    "entry_point_mechanisms",
+    "load_class",
+    "one_line",
+    "resolve_mechanism",
+]

@@ -54,7 +54,7 @@ class RPR2(Mechanism):
     )
 
     @classmethod
-    def from_design(cls, design: np.ndarray, **fixed: object) -> "RPR2":
+    def from_design(cls, design: np.ndarray, **fixed: object) -> RPR2:
         """``(b, q_min)`` with ``q_max`` fixed (default 9.6 mm, the paper's)."""
         fixed = dict(fixed)
         b, q_min = (float(v) for v in np.ravel(design))
@@ -67,8 +67,7 @@ class RPR2(Mechanism):
 
     def pose_bounds(self, orientation: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
         """Box of the workspace: P within ``q_max`` of both base joints (mm)."""
-        return (np.array([self.b - self.q_max, -self.q_max]),
-                np.array([self.q_max, self.q_max]))
+        return (np.array([self.b - self.q_max, -self.q_max]), np.array([self.q_max, self.q_max]))
 
     def reference_volume(self, orientation: tuple[float, float]) -> float:
         """``V* = pi (q_max^2 - q_min^2)`` (mm^2): one leg's annulus, so ``V/V* <= 1``."""

@@ -99,8 +99,12 @@ class RPR3(Mechanism):
                 f"origin (0, 0); got {self.platform[0].tolist()}"
             )
         self.rho_min, self.rho_max = check_range(owner, "rho_min", rho_min, "rho_max", rho_max)
-        self._params = {"base": self.base.tolist(), "platform": self.platform.tolist(),
-                        "rho_min": self.rho_min, "rho_max": self.rho_max}
+        self._params = {
+            "base": self.base.tolist(),
+            "platform": self.platform.tolist(),
+            "rho_min": self.rho_min,
+            "rho_max": self.rho_max,
+        }
 
     fixed_parameters = (
         FixedParameter("rho_min", 80.0, 1.0, 10000.0, "mm"),
@@ -115,7 +119,7 @@ class RPR3(Mechanism):
     )
 
     @classmethod
-    def from_design(cls, design: np.ndarray, **fixed: object) -> "RPR3":
+    def from_design(cls, design: np.ndarray, **fixed: object) -> RPR3:
         """The thesis' shapes scaled: base A = (0,0), (s_b,0), (0,s_b) (thesis s_b = 200)
         and platform B' = (0,0), (s_p,0), (0.8 s_p, 0.8 s_p) (thesis s_p = 50)."""
         side_b, side_p = (float(v) for v in np.ravel(design))
@@ -217,16 +221,23 @@ class RPR3(Mechanism):
         """Eq. 7-9 and the Jacobian of :meth:`_jacobian`, compiled, NaN rows outside
         ``rho_min..rho_max`` (see :func:`_rpr3_reachable_jacobians`)."""
         cos_phi, sin_phi = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 2]))
-        return _rpr3_reachable_jacobians(poses, cos_phi, sin_phi, np.ascontiguousarray(self.base),
-                                         np.ascontiguousarray(self.platform), self.rho_min, self.rho_max, column_scale)
+        return _rpr3_reachable_jacobians(
+            poses,
+            cos_phi,
+            sin_phi,
+            np.ascontiguousarray(self.base),
+            np.ascontiguousarray(self.platform),
+            self.rho_min,
+            self.rho_max,
+            column_scale,
+        )
 
     # --------------------------------------------------- forward kinematics
     def _linear_position(self, phi: np.ndarray, q: np.ndarray):
         """(x, y) = N / D from legs 2 - 1 and 3 - 1 (linear in x, y at given phi)."""
         arms = self._rotated_platform(phi)
         rows = 2.0 * (arms[:, 1:] - self.base[1:] + self.base[0])  # (K, 2, 2)
-        rhs = (q[1:] ** 2 - q[0] ** 2 - ((arms[:, 1:] - self.base[1:]) ** 2).sum(-1)
-               + (self.base[0] ** 2).sum())
+        rhs = q[1:] ** 2 - q[0] ** 2 - ((arms[:, 1:] - self.base[1:]) ** 2).sum(-1) + (self.base[0] ** 2).sum()
         den = rows[:, 0, 0] * rows[:, 1, 1] - rows[:, 0, 1] * rows[:, 1, 0]
         nx = rhs[:, 0] * rows[:, 1, 1] - rows[:, 0, 1] * rhs[:, 1]
         ny = rows[:, 0, 0] * rhs[:, 1] - rhs[:, 0] * rows[:, 1, 0]
@@ -272,9 +283,16 @@ class RPR3(Mechanism):
         return self._polish(np.column_stack([num / den[:, None], phi]), q, np.maximum(q**2, 1e-300))
 
     # ----------------------------------------------- the thesis' GA route
-    def forward_ga(self, q: np.ndarray, seed: int, generations: int = 500,
-                   population: int = 40, crossover: float = 0.999,
-                   mutation: float = 0.001, bits: int = 20) -> np.ndarray:
+    def forward_ga(
+        self,
+        q: np.ndarray,
+        seed: int,
+        generations: int = 500,
+        population: int = 40,
+        crossover: float = 0.999,
+        mutation: float = 0.001,
+        bits: int = 20,
+    ) -> np.ndarray:
         """One forward solution by a genetic algorithm, as in the thesis (Sec. 2.2, 5.2).
 
         Minimises ``F = sum_i (rho_i(x) - rho_gi)^2`` (eq. 10-11) with fitness

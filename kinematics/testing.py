@@ -78,8 +78,7 @@ class _Stop(Exception):
 
 
 def _fmt(values: np.ndarray) -> str:
-    return np.array2string(np.asarray(values, dtype=float), precision=6, separator=", ",
-                           max_line_width=10_000)
+    return np.array2string(np.asarray(values, dtype=float), precision=6, separator=", ", max_line_width=10_000)
 
 
 # ------------------------------------------------------------------ checks
@@ -93,8 +92,12 @@ def _check_attributes(cls: type[Mechanism]) -> list[str]:
         out.append(f"attributes: dof must be an integer >= 1; got {dof!r}")
         return out  # the per-column attributes cannot be checked
     pose_names = getattr(cls, "pose_names", None)
-    if not (isinstance(pose_names, tuple) and len(pose_names) == dof
-            and all(isinstance(n, str) and n for n in pose_names) and len(set(pose_names)) == dof):
+    if not (
+        isinstance(pose_names, tuple)
+        and len(pose_names) == dof
+        and all(isinstance(n, str) and n for n in pose_names)
+        and len(set(pose_names)) == dof
+    ):
         out.append(f"attributes: pose_names must be a tuple of {dof} distinct names; got {pose_names!r}")
     angular = getattr(cls, "angular", None)
     if not (isinstance(angular, tuple) and len(angular) == dof and all(isinstance(a, bool) for a in angular)):
@@ -104,8 +107,10 @@ def _check_attributes(cls: type[Mechanism]) -> list[str]:
         out.append(f"attributes: length_unit must be a non-empty string (e.g. 'mm'); got {unit!r}")
     variables = getattr(cls, "design_variables", ())
     if not (isinstance(variables, tuple) and variables and all(isinstance(v, DesignVariable) for v in variables)):
-        out.append("attributes: design_variables must be a non-empty tuple of kinematics.base.DesignVariable; "
-                   f"got {variables!r}")
+        out.append(
+            "attributes: design_variables must be a non-empty tuple of kinematics.base.DesignVariable; "
+            f"got {variables!r}"
+        )
     else:
         names = [v.name for v in variables]
         if len(set(names)) != len(names):
@@ -114,8 +119,9 @@ def _check_attributes(cls: type[Mechanism]) -> list[str]:
             if not (isinstance(v.unit, str) and v.unit.strip()):
                 out.append(f"attributes: design variable '{v.name}' declares no unit")
             if not (math.isfinite(v.lower) and math.isfinite(v.upper) and v.lower < v.upper):
-                out.append(f"attributes: design variable '{v.name}' needs finite lower < upper; "
-                           f"got [{v.lower}, {v.upper}]")
+                out.append(
+                    f"attributes: design variable '{v.name}' needs finite lower < upper; got [{v.lower}, {v.upper}]"
+                )
     fixed = getattr(cls, "default_fixed", None)
     if not isinstance(fixed, dict):
         out.append(f"attributes: default_fixed must be a dict; got {fixed!r}")
@@ -146,8 +152,9 @@ def _check_build(cls: type[Mechanism]) -> tuple[Mechanism, list[str]]:
     try:
         mech = _build(cls, centre)
     except Exception as exc:
-        raise _Stop(f"build: the design box's centre {_fmt(centre)} with default_fixed does not build: "
-                    f"{_one_line(exc)}") from None
+        raise _Stop(
+            f"build: the design box's centre {_fmt(centre)} with default_fixed does not build: {_one_line(exc)}"
+        ) from None
     if not isinstance(mech, cls):
         raise _Stop(f"build: from_design returned {type(mech).__name__}, not {cls.__name__}")
     out = []
@@ -158,8 +165,10 @@ def _check_build(cls: type[Mechanism]) -> tuple[Mechanism, list[str]]:
             try:
                 _build(cls, design)
             except Exception as exc:
-                out.append(f"build: design with '{var.name}' at its {bound} bound {value:g} (others at the "
-                           f"centre) does not build: {_one_line(exc)}")
+                out.append(
+                    f"build: design with '{var.name}' at its {bound} bound {value:g} (others at the "
+                    f"centre) does not build: {_one_line(exc)}"
+                )
     try:
         again = cls(**mech.params())
         poses = _box_samples(mech, 4, np.random.default_rng(0))
@@ -219,20 +228,21 @@ def _check_shapes(mech: Mechanism, rng: np.random.Generator, n_box: int) -> np.n
     orientation = geometry("default_orientation", lambda: mech.default_orientation, (2,))
     if orientation[0] > orientation[1]:
         raise _Stop(f"shapes: default_orientation must have lo <= hi (rad); got {_fmt(orientation)}")
-    lo = geometry("pose_bounds(default_orientation)[0]", lambda: mech.pose_bounds(mech.default_orientation)[0],
-                  (dof,))
-    hi = geometry("pose_bounds(default_orientation)[1]", lambda: mech.pose_bounds(mech.default_orientation)[1],
-                  (dof,))
+    lo = geometry("pose_bounds(default_orientation)[0]", lambda: mech.pose_bounds(mech.default_orientation)[0], (dof,))
+    hi = geometry("pose_bounds(default_orientation)[1]", lambda: mech.pose_bounds(mech.default_orientation)[1], (dof,))
     if np.any(lo > hi):
         raise _Stop(f"shapes: pose_bounds lower {_fmt(lo)} exceeds upper {_fmt(hi)}")
     q_lo = expect("actuator_range[0]", mech.actuator_range[0], (dof,))
     q_hi = expect("actuator_range[1]", mech.actuator_range[1], (dof,))
     if not np.all(q_lo < q_hi):
         raise _Stop(f"shapes: actuator_range needs lower < upper; got {_fmt(q_lo)}, {_fmt(q_hi)}")
-    for what, value in (("reference_volume(default_orientation)",
-                         geometry("reference_volume", lambda: mech.reference_volume(mech.default_orientation), ())),
-                        ("characteristic_length", geometry("characteristic_length",
-                                                           lambda: mech.characteristic_length, ()))):
+    for what, value in (
+        (
+            "reference_volume(default_orientation)",
+            geometry("reference_volume", lambda: mech.reference_volume(mech.default_orientation), ()),
+        ),
+        ("characteristic_length", geometry("characteristic_length", lambda: mech.characteristic_length, ())),
+    ):
         if not value > 0:
             raise _Stop(f"shapes: {what} must be > 0; got {float(value)}")
     unit = mech.volume_unit()
@@ -255,15 +265,21 @@ def _check_shapes(mech: Mechanism, rng: np.random.Generator, n_box: int) -> np.n
 def _check_batch(mech: Mechanism, poses: np.ndarray) -> list[str]:
     poses = np.vstack([poses, np.full((1, mech.dof), np.nan)])
     out = []
-    for what, method in (("inverse", mech.inverse), ("jacobian", mech.jacobian),
-                         ("inverse_condition", mech.inverse_condition)):
+    for what, method in (
+        ("inverse", mech.inverse),
+        ("jacobian", mech.jacobian),
+        ("inverse_condition", mech.inverse_condition),
+    ):
         batch = method(poses)
-        bad = [k for k in range(len(poses))
-               if not np.array_equal(method(poses[k:k + 1])[0], batch[k], equal_nan=True)]
+        bad = [
+            k for k in range(len(poses)) if not np.array_equal(method(poses[k : k + 1])[0], batch[k], equal_nan=True)
+        ]
         if bad:
             k = bad[0]
-            out.append(f"batch: {what} of pose {k} alone differs from row {k} of a batch of {len(poses)} "
-                       f"({len(bad)} rows differ), pose {_fmt(poses[k])}")
+            out.append(
+                f"batch: {what} of pose {k} alone differs from row {k} of a batch of {len(poses)} "
+                f"({len(bad)} rows differ), pose {_fmt(poses[k])}"
+            )
     return out
 
 
@@ -284,9 +300,11 @@ def _check_round_trip(mech: Mechanism, poses: np.ndarray) -> list[str]:
     if not misses:
         return []
     pose, error = misses[0]
-    return [f"ik-fk: forward(inverse(x)) does not contain x at {len(misses)} of {len(poses)} reachable "
-            f"poses, e.g. x = {_fmt(pose)} (nearest solution off by {error:.3g} relative, "
-            f"tolerance {ROUND_TRIP_RTOL:g})"]
+    return [
+        f"ik-fk: forward(inverse(x)) does not contain x at {len(misses)} of {len(poses)} reachable "
+        f"poses, e.g. x = {_fmt(pose)} (nearest solution off by {error:.3g} relative, "
+        f"tolerance {ROUND_TRIP_RTOL:g})"
+    ]
 
 
 def central_differences(mech: Mechanism, poses: np.ndarray, relative_step: float = 1e-6) -> np.ndarray:
@@ -316,9 +334,11 @@ def _check_jacobian(mech: Mechanism, poses: np.ndarray) -> list[str]:
         return []
     n = bad[np.argmax(np.nan_to_num(rel[bad], nan=np.inf))]
     i, j = np.unravel_index(np.argmax(np.nan_to_num(np.abs(fd[n] - jac[n]), nan=np.inf)), jac[n].shape)
-    return [f"jacobian: J differs from central differences of inverse() at {bad.size} of {len(poses)} poses, "
-            f"e.g. at {_fmt(poses[n])} entry d{i}/d{mech.pose_names[j]}: analytic {jac[n, i, j]:.6g}, "
-            f"finite-difference {fd[n, i, j]:.6g} (relative {rel[n]:.3g}, tolerance {JACOBIAN_RTOL:g})"]
+    return [
+        f"jacobian: J differs from central differences of inverse() at {bad.size} of {len(poses)} poses, "
+        f"e.g. at {_fmt(poses[n])} entry d{i}/d{mech.pose_names[j]}: analytic {jac[n, i, j]:.6g}, "
+        f"finite-difference {fd[n, i, j]:.6g} (relative {rel[n]:.3g}, tolerance {JACOBIAN_RTOL:g})"
+    ]
 
 
 def _check_pose_bounds(mech: Mechanism, rng: np.random.Generator, n_actuators: int) -> list[str]:
@@ -336,8 +356,10 @@ def _check_pose_bounds(mech: Mechanism, rng: np.random.Generator, n_actuators: i
         return []
     pose = poses[outside[0]]
     cols = [mech.pose_names[j] for j in range(mech.dof) if not lo[j] - slack[j] <= pose[j] <= hi[j] + slack[j]]
-    return [f"pose-bounds: {outside.size} of {len(poses)} poses reached by forward(q) lie outside pose_bounds, "
-            f"e.g. {_fmt(pose)} in {cols} (bounds {_fmt(lo)} .. {_fmt(hi)})"]
+    return [
+        f"pose-bounds: {outside.size} of {len(poses)} poses reached by forward(q) lie outside pose_bounds, "
+        f"e.g. {_fmt(pose)} in {cols} (bounds {_fmt(lo)} .. {_fmt(hi)})"
+    ]
 
 
 def _evaluation(mech: Mechanism, resolution: int) -> np.ndarray:
@@ -348,13 +370,17 @@ def _evaluation(mech: Mechanism, resolution: int) -> np.ndarray:
 def _check_workspace(mech: Mechanism, resolution: int) -> tuple[np.ndarray, list[str]]:
     values = _evaluation(mech, resolution)
     if not values[0] > 0:
-        raise _Stop(f"workspace: the centre design's workspace is empty at resolution {resolution} "
-                    f"(volume {values[0]:g} {mech.volume_unit()})")
+        raise _Stop(
+            f"workspace: the centre design's workspace is empty at resolution {resolution} "
+            f"(volume {values[0]:g} {mech.volume_unit()})"
+        )
     with kernels.reference_kernels():
         reference = _evaluation(mech, resolution)
     if not np.allclose(values, reference, rtol=COMPILED_RTOL, atol=0.0):
-        return values, [f"workspace: the compiled path gives (V, GDI, SURI) {_fmt(values)}, the numpy reference "
-                        f"{_fmt(reference)} (resolution {resolution})"]
+        return values, [
+            f"workspace: the compiled path gives (V, GDI, SURI) {_fmt(values)}, the numpy reference "
+            f"{_fmt(reference)} (resolution {resolution})"
+        ]
     return values, []
 
 
@@ -370,15 +396,18 @@ def _check_design_variables(cls: type[Mechanism], centre_values: np.ndarray, res
             values = _evaluation(_build(cls, design), resolution)
             changes.append(np.max(np.abs(values - centre_values) / np.maximum(np.abs(centre_values), 1e-300)))
         if not max(changes) > ACTS_RTOL:
-            out.append(f"design-variables: '{var.name}' moved to 25 % and 75 % of [{var.lower:g}, {var.upper:g}] "
-                       f"{var.unit} changes volume, GDI and SURI by at most {max(changes):.3g} relative "
-                       f"(resolution {resolution}); it does nothing")
+            out.append(
+                f"design-variables: '{var.name}' moved to 25 % and 75 % of [{var.lower:g}, {var.upper:g}] "
+                f"{var.unit} changes volume, GDI and SURI by at most {max(changes):.3g} relative "
+                f"(resolution {resolution}); it does nothing"
+            )
     return out
 
 
 # ------------------------------------------------------------------ public
-def check_mechanism(cls: type[Mechanism], *, seed: int = 0, n_poses: int = 8,
-                    resolution: int | None = None) -> list[str]:
+def check_mechanism(
+    cls: type[Mechanism], *, seed: int = 0, n_poses: int = 8, resolution: int | None = None
+) -> list[str]:
     """Run every conformance check on a mechanism class; one line per failure.
 
     Parameters
@@ -416,8 +445,10 @@ def check_mechanism(cls: type[Mechanism], *, seed: int = 0, n_poses: int = 8,
         with np.errstate(invalid="ignore"):
             reachable = reachable[mech.inverse_condition(reachable) > SINGULAR_IC][:n_poses]
         if not len(reachable):
-            raise _Stop(f"shapes: none of {len(box)} poses drawn in pose_bounds(default_orientation) is "
-                        f"reachable away from singularities (1/kappa > {SINGULAR_IC:g})")
+            raise _Stop(
+                f"shapes: none of {len(box)} poses drawn in pose_bounds(default_orientation) is "
+                f"reachable away from singularities (1/kappa > {SINGULAR_IC:g})"
+            )
     except _Stop as stop:
         return failures + [str(stop)]
     except Exception as exc:
@@ -445,8 +476,7 @@ def check_mechanism(cls: type[Mechanism], *, seed: int = 0, n_poses: int = 8,
     return failures
 
 
-def assert_conforms(cls: type[Mechanism], *, seed: int = 0, n_poses: int = 8,
-                    resolution: int | None = None) -> None:
+def assert_conforms(cls: type[Mechanism], *, seed: int = 0, n_poses: int = 8, resolution: int | None = None) -> None:
     """Raise ``AssertionError`` listing every failure of :func:`check_mechanism` (same parameters)."""
     failures = check_mechanism(cls, seed=seed, n_poses=n_poses, resolution=resolution)
     if failures:

@@ -101,10 +101,20 @@ class Tricept(Mechanism):
     angular = (False, True, True)
     length_unit = "mm"
 
-    def __init__(self, a: float, b: float, d: float, q_min: float = 400.0,
-                 q_max: float = 750.0, cone: float = 60.0, cone_joints: str = "both",
-                 cone_reference: str = "normal", offset_side: int = 1, tilt_limit: float | None = None,
-                 homogenising: str = "arm") -> None:
+    def __init__(
+        self,
+        a: float,
+        b: float,
+        d: float,
+        q_min: float = 400.0,
+        q_max: float = 750.0,
+        cone: float = 60.0,
+        cone_joints: str = "both",
+        cone_reference: str = "normal",
+        offset_side: int = 1,
+        tilt_limit: float | None = None,
+        homogenising: str = "arm",
+    ) -> None:
         owner = "Tricept"
         self.a = check_positive(owner, "a", a)
         self.b = check_positive(owner, "b", b)
@@ -114,21 +124,33 @@ class Tricept(Mechanism):
         if cone_v >= 180.0:
             raise ValueError(f"Tricept: parameter 'cone' must be in (0, 180) degrees; got {cone!r}")
         self.cone = cone_v
-        for name, value, allowed in (("cone_joints", cone_joints, ("both", "base", "platform", "none")),
-                                     ("cone_reference", cone_reference, ("normal", "home")),
-                                     ("offset_side", offset_side, (1, -1)),
-                                     ("homogenising", homogenising, ("arm", "a", "d", "none"))):
+        for name, value, allowed in (
+            ("cone_joints", cone_joints, ("both", "base", "platform", "none")),
+            ("cone_reference", cone_reference, ("normal", "home")),
+            ("offset_side", offset_side, (1, -1)),
+            ("homogenising", homogenising, ("arm", "a", "d", "none")),
+        ):
             if value not in allowed:
-                raise ValueError(f"Tricept: parameter '{name}' must be one of "
-                                 f"{', '.join(map(str, allowed))}; got {value!r}")
+                raise ValueError(
+                    f"Tricept: parameter '{name}' must be one of {', '.join(map(str, allowed))}; got {value!r}"
+                )
         if tilt_limit is not None:
             tilt_limit = check_positive(owner, "tilt_limit", tilt_limit)
         self.cone_joints, self.cone_reference = cone_joints, cone_reference
         self.offset_side, self.tilt_limit, self.homogenising = int(offset_side), tilt_limit, homogenising
-        self._params = {"a": self.a, "b": self.b, "d": self.d, "q_min": self.q_min,
-                        "q_max": self.q_max, "cone": self.cone, "cone_joints": cone_joints,
-                        "cone_reference": cone_reference, "offset_side": self.offset_side,
-                        "tilt_limit": tilt_limit, "homogenising": homogenising}
+        self._params = {
+            "a": self.a,
+            "b": self.b,
+            "d": self.d,
+            "q_min": self.q_min,
+            "q_max": self.q_max,
+            "cone": self.cone,
+            "cone_joints": cone_joints,
+            "cone_reference": cone_reference,
+            "offset_side": self.offset_side,
+            "tilt_limit": tilt_limit,
+            "homogenising": homogenising,
+        }
         self.p = _triangle(self.a)
         self.p[:, 2] = self.offset_side * self.d  # p_i +- d k, in the platform frame
         self.base = _triangle(self.b)
@@ -169,8 +191,7 @@ class Tricept(Mechanism):
         """The (psi, theta) plane at the median c of the workspace (seed 001 Fig. 3)."""
         from kinematics.workspace import evaluate  # workspace imports this module's base
 
-        coarse = evaluate(self, orientation=orientation, resolution=16, return_samples=True,
-                          error_estimate=False)
+        coarse = evaluate(self, orientation=orientation, resolution=16, return_samples=True, error_estimate=False)
         levels = coarse.samples[coarse.inside, 0]
         lo, hi = self.pose_bounds(orientation)
         c = float(np.median(levels)) if levels.size else 0.5 * float(lo[0] + hi[0])
@@ -187,8 +208,7 @@ class Tricept(Mechanism):
         reach = self.characteristic_length
         floor = math.sqrt(max(0.0, self.q_min**2 - (self.b / _S3 + reach) ** 2))
         lo, hi = float(orientation[0]), float(orientation[1])
-        return (np.array([max(0.0, floor - reach), lo, lo]),
-                np.array([self.q_max + reach, hi, hi]))
+        return (np.array([max(0.0, floor - reach), lo, lo]), np.array([self.q_max + reach, hi, hi]))
 
     def reference_volume(self, orientation: tuple[float, float]) -> float:
         """``V* = (q_max - q_min) * (psi range) * (theta range)`` (mm rad^2).
@@ -224,8 +244,7 @@ class Tricept(Mechanism):
         31, so the angular columns divided by it are the leg speed per unit
         speed of the platform joints.
         """
-        return {"arm": math.sqrt(self.a**2 / 3.0 + self.d**2), "a": self.a, "d": self.d,
-                "none": 1.0}[self.homogenising]
+        return {"arm": math.sqrt(self.a**2 / 3.0 + self.d**2), "a": self.a, "d": self.d, "none": 1.0}[self.homogenising]
 
     @property
     def actuator_range(self) -> tuple[np.ndarray, np.ndarray]:
@@ -243,11 +262,14 @@ class Tricept(Mechanism):
         """``R = R_y(theta) R_x(psi)`` (eq. 1), shape (N, 3, 3)."""
         cp, sp, ct, st = np.cos(psi), np.sin(psi), np.cos(theta), np.sin(theta)
         zero = np.zeros_like(psi)
-        return np.stack([
-            np.stack([ct, sp * st, cp * st], axis=-1),
-            np.stack([zero, cp, -sp], axis=-1),
-            np.stack([-st, ct * sp, ct * cp], axis=-1),
-        ], axis=-2)
+        return np.stack(
+            [
+                np.stack([ct, sp * st, cp * st], axis=-1),
+                np.stack([zero, cp, -sp], axis=-1),
+                np.stack([-st, ct * sp, ct * cp], axis=-1),
+            ],
+            axis=-2,
+        )
 
     def _arms(self, poses: np.ndarray) -> np.ndarray:
         """``r_i = R (p_i + d k)`` (N, 3, 3), mm, base-frame orientation."""
@@ -321,11 +343,22 @@ class Tricept(Mechanism):
         cos_psi, sin_psi = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 1]))
         cos_theta, sin_theta = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 2]))
         return _tricept_reachable_jacobians(
-            poses, cos_psi, sin_psi, cos_theta, sin_theta, np.ascontiguousarray(self.p), np.ascontiguousarray(self.base),
-            np.ascontiguousarray(self._home_axes), self.q_min, self.q_max,
+            poses,
+            cos_psi,
+            sin_psi,
+            cos_theta,
+            sin_theta,
+            np.ascontiguousarray(self.p),
+            np.ascontiguousarray(self.base),
+            np.ascontiguousarray(self._home_axes),
+            self.q_min,
+            self.q_max,
             cone if self.cone_joints in ("both", "base") else np.inf,
             cone if self.cone_joints in ("both", "platform") else np.inf,
-            self.cone_reference == "home", tilt, column_scale)
+            self.cone_reference == "home",
+            tilt,
+            column_scale,
+        )
 
     # --------------------------------------------------- forward kinematics
     def _eliminants(self, psi: np.ndarray, theta: np.ndarray, q: np.ndarray, scale: float):
@@ -407,8 +440,23 @@ def _within_cone(cosine, cone, cone_cosine):
 
 
 @kernels.jit
-def _tricept_reachable_jacobians(poses, cos_psi, sin_psi, cos_theta, sin_theta, platform, base, home_axes, q_min,
-                                 q_max, base_cone, platform_cone, home_reference, tilt_limit, column_scale):
+def _tricept_reachable_jacobians(
+    poses,
+    cos_psi,
+    sin_psi,
+    cos_theta,
+    sin_theta,
+    platform,
+    base,
+    home_axes,
+    q_min,
+    q_max,
+    base_cone,
+    platform_cone,
+    home_reference,
+    tilt_limit,
+    column_scale,
+):
     """Per pose (N, 3) of (c, psi, theta) (mm, rad; the cosines and sines of psi and theta from
     :func:`kinematics.kernels.periodic_cos_sin`): ``R = R_y(theta) R_x(psi)`` (eq. 1),
     legs ``R p_i + c k - b_i`` and their lengths (eq. 1-5) within ``q_min..q_max``,
@@ -453,8 +501,10 @@ def _tricept_reachable_jacobians(poses, cos_psi, sin_psi, cos_theta, sin_theta, 
             else:
                 base_cos = nz
                 platform_cos = nx * rot[0, 2] + ny * rot[1, 2] + nz * rot[2, 2]
-            if not (_within_cone(base_cos, base_cone, base_cone_cos)
-                    and _within_cone(platform_cos, platform_cone, platform_cone_cos)):
+            if not (
+                _within_cone(base_cos, base_cone, base_cone_cos)
+                and _within_cone(platform_cos, platform_cone, platform_cone_cos)
+            ):
                 ok = False
                 break
             # moment r x n of eq. 31

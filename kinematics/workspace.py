@@ -125,9 +125,14 @@ class Evaluation:
 
 
 # ------------------------------------------------------------- membership
-def membership(mechanism: Mechanism, poses: np.ndarray, orientation: tuple[float, float],
-               min_inverse_condition: float, length: float | None = None,
-               reachable: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def membership(
+    mechanism: Mechanism,
+    poses: np.ndarray,
+    orientation: tuple[float, float],
+    min_inverse_condition: float,
+    length: float | None = None,
+    reachable: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
     """Which poses (N, dof) are in the workspace, and their ``1/kappa``.
 
     ``reachable`` (N,) bool, when given, says which poses are already known to
@@ -162,8 +167,7 @@ def membership(mechanism: Mechanism, poses: np.ndarray, orientation: tuple[float
     return _dexterous(ic, min_inverse_condition), ic
 
 
-def _within_orientation(mechanism: Mechanism, poses: np.ndarray,
-                        orientation: tuple[float, float]) -> np.ndarray:
+def _within_orientation(mechanism: Mechanism, poses: np.ndarray, orientation: tuple[float, float]) -> np.ndarray:
     """(N,) bool: every angular pose variable within ``orientation`` (rad)."""
     angular = np.asarray(mechanism.angular)
     if not angular.any():
@@ -172,9 +176,13 @@ def _within_orientation(mechanism: Mechanism, poses: np.ndarray,
     return row_all((ang >= orientation[0]) & (ang <= orientation[1]))
 
 
-def _oriented_and_dexterous(mechanism: Mechanism, poses: np.ndarray, ic: np.ndarray,
-                            orientation: tuple[float, float], min_inverse_condition: float
-                            ) -> tuple[np.ndarray, np.ndarray]:
+def _oriented_and_dexterous(
+    mechanism: Mechanism,
+    poses: np.ndarray,
+    ic: np.ndarray,
+    orientation: tuple[float, float],
+    min_inverse_condition: float,
+) -> tuple[np.ndarray, np.ndarray]:
     """The end of a compiled membership test: ``ic`` (N,), 1/kappa of the reachable poses and
     NaN elsewhere, set to NaN outside the orientation box (in place); returns ``(inside, ic)``."""
     ic[~_within_orientation(mechanism, poses, orientation)] = np.nan
@@ -188,9 +196,15 @@ def _dexterous(ic: np.ndarray, min_inverse_condition: float) -> np.ndarray:
 
 
 # ------------------------------------------------------------------- grid
-def _grid_axes(mechanism: Mechanism, resolution: int, orientation: tuple[float, float],
-               fixed: dict[str, float], offset: float = 0.5, exact_axis: int | None = None,
-               bounds: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[list[np.ndarray], float]:
+def _grid_axes(
+    mechanism: Mechanism,
+    resolution: int,
+    orientation: tuple[float, float],
+    fixed: dict[str, float],
+    offset: float = 0.5,
+    exact_axis: int | None = None,
+    bounds: tuple[np.ndarray, np.ndarray] | None = None,
+) -> tuple[list[np.ndarray], float]:
     """Grid nodes per pose variable, and the cell measure.
 
     ``offset = 0.5`` gives the midpoint rule; another offset gives an
@@ -217,12 +231,15 @@ def _grid_axes(mechanism: Mechanism, resolution: int, orientation: tuple[float, 
     return axes, cell
 
 
-def _sampled_indices(mechanism: Mechanism, orientation: tuple[float, float],
-                     fixed: dict[str, float], exact_axis: int | None) -> list[int]:
+def _sampled_indices(
+    mechanism: Mechanism, orientation: tuple[float, float], fixed: dict[str, float], exact_axis: int | None
+) -> list[int]:
     """Column indices of the pose variables the grid samples (not fixed, exact or constant)."""
-    return [j for j, name in enumerate(mechanism.pose_names)
-            if name not in fixed and j != exact_axis
-            and not (mechanism.angular[j] and orientation[0] == orientation[1])]
+    return [
+        j
+        for j, name in enumerate(mechanism.pose_names)
+        if name not in fixed and j != exact_axis and not (mechanism.angular[j] and orientation[0] == orientation[1])
+    ]
 
 
 def _grid_poses(axes: list[np.ndarray], start: int, stop: int) -> np.ndarray:
@@ -232,7 +249,7 @@ def _grid_poses(axes: list[np.ndarray], start: int, stop: int) -> np.ndarray:
     if start % inner == 0 and (stop % inner == 0 or stop == math.prod(shape)):
         # whole rows of the leading axis (the chunks of _chunk_bounds): broadcast each
         # axis into its column, ~20x faster than unravelling every row index
-        block = [axes[0][start // inner:-(-stop // inner)], *axes[1:]]
+        block = [axes[0][start // inner : -(-stop // inner)], *axes[1:]]
         out = np.empty(tuple(len(a) for a in block) + (len(axes),))
         for k, axis in enumerate(block):
             out[..., k] = axis.reshape([-1 if j == k else 1 for j in range(len(axes))])
@@ -267,16 +284,18 @@ def _exact_axis(mechanism: Mechanism, fixed: dict[str, float]) -> int | None:
     return axis
 
 
-def sampled_axes(mechanism: Mechanism, orientation: tuple[float, float],
-                 fixed: dict[str, float] | None = None) -> list[str]:
+def sampled_axes(
+    mechanism: Mechanism, orientation: tuple[float, float], fixed: dict[str, float] | None = None
+) -> list[str]:
     """Names of the pose variables that the grid samples (not fixed, not exact, not constant)."""
     fixed = fixed or {}
     exact = _exact_axis(mechanism, fixed)
     return [mechanism.pose_names[j] for j in _sampled_indices(mechanism, orientation, fixed, exact)]
 
 
-def default_resolution(mechanism: Mechanism, orientation: tuple[float, float] | None = None,
-                       fixed: dict[str, float] | None = None) -> int:
+def default_resolution(
+    mechanism: Mechanism, orientation: tuple[float, float] | None = None, fixed: dict[str, float] | None = None
+) -> int:
     """Largest resolution whose grid has at most ``mechanism.default_nodes`` nodes.
 
     The node budgets (class attribute of each mechanism) keep a GA run of
@@ -303,14 +322,22 @@ class _PointValues:
     angular variable lies in the orientation box (a grid that spans it).
     """
 
-    def __init__(self, mechanism: Mechanism, exact: int | None, box: tuple[np.ndarray, np.ndarray],
-                 orientation: tuple[float, float], min_ic: float, length: float | None):
+    def __init__(
+        self,
+        mechanism: Mechanism,
+        exact: int | None,
+        box: tuple[np.ndarray, np.ndarray],
+        orientation: tuple[float, float],
+        min_ic: float,
+        length: float | None,
+    ):
         self.mechanism, self.exact, self.box = mechanism, exact, box
         self.orientation, self.min_ic, self.length = orientation, min_ic, length
         self.count = 0  # poses evaluated (the cost of an evaluation)
 
-    def __call__(self, poses: np.ndarray, oriented: bool = False, keep_extent: bool = False
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+    def __call__(
+        self, poses: np.ndarray, oriented: bool = False, keep_extent: bool = False
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
         """``(inside, weight, ic, extent)`` of ``poses`` (modified in place along the exact
         axis: the middle of the feasible interval, when the numpy path needs a pose there)."""
         mechanism, exact, orientation, min_ic = self.mechanism, self.exact, self.orientation, self.min_ic
@@ -336,11 +363,15 @@ class _PointValues:
                 extent = np.column_stack([lower, upper])
         if fused is not None:
             # ic is NaN wherever the axis interval is empty, so inside implies weight > 0
-            inside, ic = ((_dexterous(ic, min_ic), ic) if oriented
-                          else _oriented_and_dexterous(mechanism, poses, ic, orientation, min_ic))
+            inside, ic = (
+                (_dexterous(ic, min_ic), ic)
+                if oriented
+                else _oriented_and_dexterous(mechanism, poses, ic, orientation, min_ic)
+            )
         else:
-            inside, ic = membership(mechanism, poses, orientation, min_ic, self.length,
-                                    reachable=None if exact is None else weight > 0)
+            inside, ic = membership(
+                mechanism, poses, orientation, min_ic, self.length, reachable=None if exact is None else weight > 0
+            )
             inside &= weight > 0
         return inside, weight, ic, extent
 
@@ -352,8 +383,15 @@ BISECTIONS = 4
 _MAX_SLOPE = 1e4
 
 
-def _bisect(values: _PointValues, probe: np.ndarray, column: np.ndarray, p_in: np.ndarray,
-            p_out: np.ndarray, start: np.ndarray, steps: int) -> tuple[np.ndarray, np.ndarray]:
+def _bisect(
+    values: _PointValues,
+    probe: np.ndarray,
+    column: np.ndarray,
+    p_in: np.ndarray,
+    p_out: np.ndarray,
+    start: np.ndarray,
+    steps: int,
+) -> tuple[np.ndarray, np.ndarray]:
     """Bisect ``steps`` times between an inside (``p_in``) and an outside (``p_out``) value of
     column ``column`` (per row) of the poses ``probe`` (N, dof), all rows in one call per step.
 
@@ -389,9 +427,15 @@ def _bisect(values: _PointValues, probe: np.ndarray, column: np.ndarray, p_in: n
     return p_in + t * (p_out - p_in), value
 
 
-def _edge_crossings(values: _PointValues, axes: list[np.ndarray], inside: np.ndarray,
-                    f: tuple[np.ndarray, ...], sampled: list[int], box: tuple[np.ndarray, np.ndarray],
-                    steps: int = BISECTIONS) -> list[tuple[np.ndarray, ...]]:
+def _edge_crossings(
+    values: _PointValues,
+    axes: list[np.ndarray],
+    inside: np.ndarray,
+    f: tuple[np.ndarray, ...],
+    sampled: list[int],
+    box: tuple[np.ndarray, np.ndarray],
+    steps: int = BISECTIONS,
+) -> list[tuple[np.ndarray, ...]]:
     """Where the workspace boundary crosses the grid edges, along each sampled axis.
 
     ``inside`` is the node membership in the grid's shape. The edges along
@@ -455,14 +499,26 @@ def _edge_crossings(values: _PointValues, axes: list[np.ndarray], inside: np.nda
         idx_in[j] = np.where(in_left, edge, edge + 1)
         idx_node = list(idx)
         idx_node[j] = np.clip(edge - 1, 0, n - 1)
-        brackets.append((idx, edge, np.where(in_left, pos[edge], pos[edge + 1]),
-                         np.where(in_left, pos[edge + 1], pos[edge]), g[(slice(None),) + tuple(idx_in)],
-                         _node_poses(axes, idx_node)))
+        brackets.append(
+            (
+                idx,
+                edge,
+                np.where(in_left, pos[edge], pos[edge + 1]),
+                np.where(in_left, pos[edge + 1], pos[edge]),
+                g[(slice(None),) + tuple(idx_in)],
+                _node_poses(axes, idx_node),
+            )
+        )
     sizes = [b[1].size for b in brackets]
-    crossing, value = _bisect(values, np.vstack([b[5] for b in brackets]),
-                              np.repeat(sampled, sizes), np.concatenate([b[2] for b in brackets]),
-                              np.concatenate([b[3] for b in brackets]),
-                              np.concatenate([b[4] for b in brackets], axis=1), steps)
+    crossing, value = _bisect(
+        values,
+        np.vstack([b[5] for b in brackets]),
+        np.repeat(sampled, sizes),
+        np.concatenate([b[2] for b in brackets]),
+        np.concatenate([b[3] for b in brackets]),
+        np.concatenate([b[4] for b in brackets], axis=1),
+        steps,
+    )
     out = []
     start = 0
     for (j, n, *_), (idx, edge, *_) in zip(ext, brackets):
@@ -481,8 +537,7 @@ def _edge_crossings(values: _PointValues, axes: list[np.ndarray], inside: np.nda
     return out
 
 
-def _integrands(inside: np.ndarray, weight: np.ndarray, ic: np.ndarray, count: int = 2
-                ) -> tuple[np.ndarray, ...]:
+def _integrands(inside: np.ndarray, weight: np.ndarray, ic: np.ndarray, count: int = 2) -> tuple[np.ndarray, ...]:
     """The integrands of V and of V * GDI at poses: ``weight`` and ``weight / kappa``, 0 outside."""
     f0 = np.where(inside, weight, 0.0)
     return (f0, np.where(inside, weight * np.nan_to_num(ic), 0.0))[:count]
@@ -545,10 +600,17 @@ def _cube_fraction(slopes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return fraction, centroid
 
 
-def _boundary_corrected_sums(values: _PointValues, axes: list[np.ndarray],
-                             box: tuple[np.ndarray, np.ndarray], resolution: int, sampled: list[int],
-                             inside: np.ndarray, f0: np.ndarray, f1: np.ndarray,
-                             steps: int) -> tuple[float, float]:
+def _boundary_corrected_sums(
+    values: _PointValues,
+    axes: list[np.ndarray],
+    box: tuple[np.ndarray, np.ndarray],
+    resolution: int,
+    sampled: list[int],
+    inside: np.ndarray,
+    f0: np.ndarray,
+    f1: np.ndarray,
+    steps: int,
+) -> tuple[float, float]:
     """``sum_cells fraction * f`` for ``f0`` (weight) and ``f1`` (weight / kappa), node arrays
     in the grid's shape (0 outside): each boundary cell counts its inside fraction times
     ``f`` at the centroid of its inside part (see :func:`_integrate_grid`)."""
@@ -577,8 +639,9 @@ def _boundary_corrected_sums(values: _PointValues, axes: list[np.ndarray],
     with np.errstate(divide="ignore", invalid="ignore"):
         # centroid of the inside part: the node's side for an inside node, the rest of the
         # cell (whose centroid is the node) for an outside one
-        centroid = np.where(is_in[:, None], centroid,
-                            np.where((own < 1.0)[:, None], -centroid * (own / (1.0 - own))[:, None], 0.0))
+        centroid = np.where(
+            is_in[:, None], centroid, np.where((own < 1.0)[:, None], -centroid * (own / (1.0 - own))[:, None], 0.0)
+        )
     fraction = np.where(is_in, own, 1.0 - own)
     # f at the centroid, linear along the axis of the nearest crossing: from the node and the
     # node behind it (inside node), or from the crossing and the inside node beyond it
@@ -721,10 +784,17 @@ def _cut_cell_sums(inside, f0, f1, nearest, toward, crossing_values, strides, si
     return total0, total1
 
 
-def _boundary_corrected_sums_compiled(values: _PointValues, axes: list[np.ndarray],
-                                      box: tuple[np.ndarray, np.ndarray], resolution: int,
-                                      sampled: list[int], inside: np.ndarray, f0: np.ndarray,
-                                      f1: np.ndarray, steps: int) -> tuple[float, float]:
+def _boundary_corrected_sums_compiled(
+    values: _PointValues,
+    axes: list[np.ndarray],
+    box: tuple[np.ndarray, np.ndarray],
+    resolution: int,
+    sampled: list[int],
+    inside: np.ndarray,
+    f0: np.ndarray,
+    f1: np.ndarray,
+    steps: int,
+) -> tuple[float, float]:
     """:func:`_boundary_corrected_sums` with the bookkeeping compiled: the faces to test
     (:func:`_face_nodes`), the brackets (:func:`_brackets`), the nearest crossing per node and
     axis (:func:`_nearest_crossings`) and the cut cells (:func:`_cut_cell_sums`) work on flat
@@ -732,12 +802,12 @@ def _boundary_corrected_sums_compiled(values: _PointValues, axes: list[np.ndarra
     shape = inside.shape
     flat_inside = np.ascontiguousarray(inside.ravel())
     f0, f1 = np.ascontiguousarray(f0.ravel()), np.ascontiguousarray(f1.ravel())
-    strides = np.array([math.prod(shape[j + 1:]) for j in sampled], dtype=np.int64)
+    strides = np.array([math.prod(shape[j + 1 :]) for j in sampled], dtype=np.int64)
     sizes = np.array([shape[j] for j in sampled], dtype=np.int64)
     positions = np.zeros((len(sampled), int(sizes.max()) + 2))
     for k, j in enumerate(sampled):  # the face, the nodes, the face
         positions[k, 0], positions[k, sizes[k] + 1] = float(box[0][j]), float(box[1][j])
-        positions[k, 1:sizes[k] + 1] = axes[j]
+        positions[k, 1 : sizes[k] + 1] = axes[j]
     steps_of = (positions[np.arange(len(sampled)), sizes + 1] - positions[:, 0]) / resolution
     column = np.asarray(sampled, dtype=np.int64)
 
@@ -749,15 +819,18 @@ def _boundary_corrected_sums_compiled(values: _PointValues, axes: list[np.ndarra
     face_axis, face_side, face_node = _face_nodes(flat_inside, strides, sizes)
     face_state = np.zeros((3, len(sampled), 2, flat_inside.size))  # inside, f0, f1 at the faces
     if face_node.size:
-        inside_f, weight_f, ic_f, _ = values(poses_of(face_node, face_axis,
-                                                      positions[face_axis, face_side * (sizes[face_axis] + 1)]))
+        inside_f, weight_f, ic_f, _ = values(
+            poses_of(face_node, face_axis, positions[face_axis, face_side * (sizes[face_axis] + 1)])
+        )
         for m, fm in enumerate((inside_f,) + _integrands(inside_f, weight_f, ic_f)):
             face_state[m, face_axis, face_side, face_node] = fm
     axis, left, right, p_in, p_out, start = _brackets(flat_inside, f0, f1, face_state, strides, sizes, positions)
-    crossing, value = _bisect(values, poses_of(np.where(left >= 0, left, right), axis, p_in), column[axis],
-                              p_in, p_out, start, steps)
-    nearest, toward, crossing_values = _nearest_crossings(axis, left, right, crossing, value, positions,
-                                                          strides, sizes, steps_of, flat_inside.size)
+    crossing, value = _bisect(
+        values, poses_of(np.where(left >= 0, left, right), axis, p_in), column[axis], p_in, p_out, start, steps
+    )
+    nearest, toward, crossing_values = _nearest_crossings(
+        axis, left, right, crossing, value, positions, strides, sizes, steps_of, flat_inside.size
+    )
     return _cut_cell_sums(flat_inside, f0, f1, nearest, toward, crossing_values, strides, sizes, _MAX_SLOPE)
 
 
@@ -864,10 +937,17 @@ def _nearest_crossings(axis, left, right, crossing, value, positions, strides, s
 COARSE = 2
 
 
-def _occupied_box(values: _PointValues, mechanism: Mechanism, resolution: int,
-                  orientation: tuple[float, float], fixed: dict[str, float], exact: int | None,
-                  box: tuple[np.ndarray, np.ndarray], sampled: list[int], steps: int = 12
-                  ) -> tuple[np.ndarray, np.ndarray]:
+def _occupied_box(
+    values: _PointValues,
+    mechanism: Mechanism,
+    resolution: int,
+    orientation: tuple[float, float],
+    fixed: dict[str, float],
+    exact: int | None,
+    box: tuple[np.ndarray, np.ndarray],
+    sampled: list[int],
+    steps: int = 12,
+) -> tuple[np.ndarray, np.ndarray]:
     """The pose box narrowed, along each sampled axis, to the workspace's extent.
 
     Why: a mechanism's box is a bound from the geometry and the workspace may
@@ -886,8 +966,9 @@ def _occupied_box(values: _PointValues, mechanism: Mechanism, resolution: int,
     coarse = max(resolution // COARSE, 4)
     axes, _ = _grid_axes(mechanism, coarse, orientation, fixed, 0.5, exact, box)
     shape = tuple(len(a) for a in axes)
-    inside = np.concatenate([values(_grid_poses(axes, start, stop))[0]
-                             for start, stop in _chunk_bounds(axes)]).reshape(shape)
+    inside = np.concatenate([values(_grid_poses(axes, start, stop))[0] for start, stop in _chunk_bounds(axes)]).reshape(
+        shape
+    )
     lo, hi = box[0].astype(float).copy(), box[1].astype(float).copy()
     if not inside.any():
         return lo, hi
@@ -900,13 +981,25 @@ def _occupied_box(values: _PointValues, mechanism: Mechanism, resolution: int,
                 continue  # the workspace reaches the end layer: keep the face
             idx = list(np.nonzero(np.take(inside, [layer], axis=j)))
             idx[j] = np.full(idx[0].size, layer)
-            jobs.append((j, side, _node_poses(axes, idx), np.full(idx[0].size, axes[j][layer]),
-                         np.full(idx[0].size, axes[j][beyond])))
+            jobs.append(
+                (
+                    j,
+                    side,
+                    _node_poses(axes, idx),
+                    np.full(idx[0].size, axes[j][layer]),
+                    np.full(idx[0].size, axes[j][beyond]),
+                )
+            )
     if jobs:
-        crossing, _ = _bisect(values, np.vstack([job[2] for job in jobs]),
-                              np.concatenate([np.full(job[3].size, job[0]) for job in jobs]),
-                              np.concatenate([job[3] for job in jobs]), np.concatenate([job[4] for job in jobs]),
-                              np.zeros((0, sum(job[3].size for job in jobs))), steps)
+        crossing, _ = _bisect(
+            values,
+            np.vstack([job[2] for job in jobs]),
+            np.concatenate([np.full(job[3].size, job[0]) for job in jobs]),
+            np.concatenate([job[3] for job in jobs]),
+            np.concatenate([job[4] for job in jobs]),
+            np.zeros((0, sum(job[3].size for job in jobs))),
+            steps,
+        )
         start = 0
         for j, side, _, p_in, _ in jobs:
             stop = start + p_in.size
@@ -919,8 +1012,9 @@ def _occupied_box(values: _PointValues, mechanism: Mechanism, resolution: int,
     return lo, hi
 
 
-def _integrate_grid(mechanism, resolution, orientation, min_ic, length, fixed, keep_samples,
-                    offset=0.5, refine=True, steps=BISECTIONS):
+def _integrate_grid(
+    mechanism, resolution, orientation, min_ic, length, fixed, keep_samples, offset=0.5, refine=True, steps=BISECTIONS
+):
     """Integration on a regular grid; one axis exactly when the mechanism allows it.
 
     Each grid node carries a weight: 1, or, along an exact axis, the length of
@@ -954,8 +1048,11 @@ def _integrate_grid(mechanism, resolution, orientation, min_ic, length, fixed, k
     total = int(np.prod(shape))
     # the grid's angular nodes all lie in the orientation box (it spans the box): then the
     # fused path needs no per-node orientation test
-    oriented = all(axis.min() >= orientation[0] and axis.max() <= orientation[1]
-                   for axis, angular in zip(axes, mechanism.angular) if angular)
+    oriented = all(
+        axis.min() >= orientation[0] and axis.max() <= orientation[1]
+        for axis, angular in zip(axes, mechanism.angular)
+        if angular
+    )
     parts = []
     kept = []
     for start, stop in _chunk_bounds(axes):
@@ -970,14 +1067,17 @@ def _integrate_grid(mechanism, resolution, orientation, min_ic, length, fixed, k
     f0 = np.where(inside, weight, 0.0)
     f1 = np.where(inside, weight * np.nan_to_num(ic), 0.0)
     if sampled:
-        weight_sum, ic_sum = _boundary_corrected_sums(values, axes, box, resolution, sampled,
-                                                      inside.reshape(shape), f0.reshape(shape),
-                                                      f1.reshape(shape), steps)
+        weight_sum, ic_sum = _boundary_corrected_sums(
+            values, axes, box, resolution, sampled, inside.reshape(shape), f0.reshape(shape), f1.reshape(shape), steps
+        )
     else:
         weight_sum, ic_sum = float(f0.sum()), float(f1.sum())
     volume = weight_sum * cell
-    stats = ((ic_sum / weight_sum,) + ((float(vals.min()), float(vals.max())) if vals.size else (0.0, 0.0))
-             if weight_sum > 0 else (0.0, 0.0, 0.0))
+    stats = (
+        (ic_sum / weight_sum,) + ((float(vals.min()), float(vals.max())) if vals.size else (0.0, 0.0))
+        if weight_sum > 0
+        else (0.0, 0.0, 0.0)
+    )
     samples = tuple(np.concatenate(k) for k in zip(*kept)) if keep_samples else None
     return volume, stats, total, n_inside, samples
 
@@ -1055,18 +1155,24 @@ def _integrate_polar(mechanism, resolution, orientation, min_ic, length, keep_sa
     stats = (gdi, float(used.min()), float(used.max())) if used.size else (0.0, 0.0, 0.0)
     samples = None
     if keep_samples:
-        samples = (np.concatenate(all_poses), np.concatenate(all_ic),
-                   np.tile(boundary > 0, resolution))
+        samples = (np.concatenate(all_poses), np.concatenate(all_ic), np.tile(boundary > 0, resolution))
     n_samples = int(inside_along.size + 30 * zz.size + resolution * zz.size)
     return volume, stats, n_samples, n_inside, samples
 
 
 # --------------------------------------------------------------- evaluate
-def evaluate(mechanism: Mechanism, *, resolution: int | None = None,
-             orientation: tuple[float, float] | None = None,
-             min_inverse_condition: float = 0.01, length: float | None = None,
-             method: str = "midpoint", fixed: dict[str, float] | None = None,
-             return_samples: bool = False, error_estimate: bool = True) -> Evaluation:
+def evaluate(
+    mechanism: Mechanism,
+    *,
+    resolution: int | None = None,
+    orientation: tuple[float, float] | None = None,
+    min_inverse_condition: float = 0.01,
+    length: float | None = None,
+    method: str = "midpoint",
+    fixed: dict[str, float] | None = None,
+    return_samples: bool = False,
+    error_estimate: bool = True,
+) -> Evaluation:
     """Workspace volume, GDI, SURI and 1/kappa statistics of one design.
 
     Parameters
@@ -1126,8 +1232,7 @@ def evaluate(mechanism: Mechanism, *, resolution: int | None = None,
     fixed = dict(fixed or {})
     unknown = set(fixed) - set(mechanism.pose_names)
     if unknown:
-        raise ValueError(f"fixed names unknown pose variables {sorted(unknown)}; "
-                         f"allowed: {mechanism.pose_names}")
+        raise ValueError(f"fixed names unknown pose variables {sorted(unknown)}; allowed: {mechanism.pose_names}")
     if resolution is None:
         resolution = default_resolution(mechanism, orientation, fixed)
     if isinstance(resolution, bool) or not isinstance(resolution, (int, np.integer)) or resolution < 1:
@@ -1139,11 +1244,12 @@ def evaluate(mechanism: Mechanism, *, resolution: int | None = None,
 
     if method == "polar":
         volume, (ic_mean, ic_min, ic_max), n_samples, n_inside, samples = _integrate_polar(
-            mechanism, resolution, orientation, min_ic, length, return_samples)
+            mechanism, resolution, orientation, min_ic, length, return_samples
+        )
     else:
         volume, (ic_mean, ic_min, ic_max), n_samples, n_inside, samples = _integrate_grid(
-            mechanism, resolution, orientation, min_ic, length, fixed, return_samples,
-            refine=method == "grid")
+            mechanism, resolution, orientation, min_ic, length, fixed, return_samples, refine=method == "grid"
+        )
     volume_error = gdi_error = math.nan
     if error_estimate:
         # grid: the same integral at half the resolution (about the error of the coarser of the
@@ -1153,15 +1259,16 @@ def evaluate(mechanism: Mechanism, *, resolution: int | None = None,
         # of its discretisation error; polar: half resolution
         if method == "polar":
             other_volume, (other_mean, _, _), *_ = _integrate_polar(
-                mechanism, max(resolution // 2, 1), orientation, min_ic, length, False)
+                mechanism, max(resolution // 2, 1), orientation, min_ic, length, False
+            )
         elif method == "grid":
             other_volume, (other_mean, _, _), *_ = _integrate_grid(
-                mechanism, max(int(round(ERROR_RESOLUTION * resolution)), 2), orientation, min_ic,
-                length, fixed, False)
+                mechanism, max(int(round(ERROR_RESOLUTION * resolution)), 2), orientation, min_ic, length, fixed, False
+            )
         else:
             other_volume, (other_mean, _, _), *_ = _integrate_grid(
-                mechanism, resolution, orientation, min_ic, length, fixed, False, offset=0.0,
-                refine=False)
+                mechanism, resolution, orientation, min_ic, length, fixed, False, offset=0.0, refine=False
+            )
         volume_error = abs(volume - other_volume)
         gdi_error = abs(ic_mean - other_mean)
     reference = mechanism.reference_volume(orientation)

@@ -18,4 +18,3 @@ def _config_dir() -> Path:
 
 #: the primary config directory (works from a wheel, from an editable install, from any folder)
 CONFIG_DIR = _config_dir()
-

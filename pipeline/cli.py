@@ -27,8 +27,8 @@ from hydra.types import RunMode
 from omegaconf import DictConfig
 from omegaconf.errors import OmegaConfBaseException
 
-from pipeline.commands import evaluate_command, one_line, print_help, subcommand, suggestion  # noqa: F401
 from kinematics.plugins import PluginError
+from pipeline.commands import evaluate_command, one_line, print_help, subcommand, suggestion  # noqa: F401
 from pipeline.config import CONFIG_DIR, guard, register_configs, validate
 from pipeline.errors import ConfigError, RunError, Terminated, check_writable, describe_fault
 from pipeline.evaluation import pool
@@ -40,8 +40,21 @@ log = logging.getLogger(__name__)
 
 
 #: Hydra flags that print and exit without running the task (nothing to check)
-INFO_FLAGS = ("--help", "-h", "--hydra-help", "--version", "--cfg", "-c", "--resolve", "--package", "-p",
-              "--info", "-i", "--shell-completion", "-sc")
+INFO_FLAGS = (
+    "--help",
+    "-h",
+    "--hydra-help",
+    "--version",
+    "--cfg",
+    "-c",
+    "--resolve",
+    "--package",
+    "-p",
+    "--info",
+    "-i",
+    "--shell-completion",
+    "-sc",
+)
 #: Hydra flags that run the task: the overrides are checked as for a single run
 MULTIRUN_FLAGS = ("-m", "--multirun")
 
@@ -63,8 +76,10 @@ def precheck_overrides(argv: list[str]) -> None:
     try:
         unknown = [f for f in flags if f not in MULTIRUN_FLAGS]
         if unknown:
-            raise ConfigError(f"{unknown[0]} is refused: the config comes from conf/ and +experiment=NAME; "
-                              f"allowed flags: {', '.join(MULTIRUN_FLAGS + INFO_FLAGS)}")
+            raise ConfigError(
+                f"{unknown[0]} is refused: the config comes from conf/ and +experiment=NAME; "
+                f"allowed flags: {', '.join(MULTIRUN_FLAGS + INFO_FLAGS)}"
+            )
         overrides = [a for a in argv if not a.startswith("-")]
         if flags:
             # each job's values are validated by the sweeper, which names the job
@@ -162,8 +177,10 @@ def run_from_hydra(cfg: DictConfig) -> dict:
             dataset = Path(cfg.paths.dataset_dir)
             aggregate(run_dir, dataset)
             shown = os.path.relpath(run_dir) if run_dir.is_absolute() else str(run_dir)
-            print(f"run: {shown}\ndataset: {dataset} "
-                  f"(from pipeline.store import read_dataset; read_dataset({str(dataset)!r}))")
+            print(
+                f"run: {shown}\ndataset: {dataset} "
+                f"(from pipeline.store import read_dataset; read_dataset({str(dataset)!r}))"
+            )
         return {"status": "complete", "reason": ""}
     except (ConfigError, RunError) as exc:
         if isinstance(exc, ConfigError):
@@ -198,6 +215,7 @@ def _guarded_emit(handler: logging.Handler, emit):
             emit(record)
         except OSError:
             handler.handleError(record)
+
     return emit_or_drop
 
 
@@ -218,8 +236,7 @@ def _exit_on_interrupt(exc: KeyboardInterrupt) -> None:
     shutdown_workers()
     cause = exc.cause if isinstance(exc, Interrupted) else exc
     what, code = ("terminated (SIGTERM)", 143) if isinstance(cause, Terminated) else ("interrupted", 130)
-    where = (f"; {exc.run_dir} is marked interrupted and will not be aggregated"
-             if isinstance(exc, Interrupted) else "")
+    where = f"; {exc.run_dir} is marked interrupted and will not be aggregated" if isinstance(exc, Interrupted) else ""
     print(f"error: {what}{where}", file=sys.stderr)
     sys.exit(code)
 

@@ -49,8 +49,9 @@ def suggestion(exc: BaseException, argv: list[str]) -> str:
     key = re.search(r"Could not override '([^']+)'", text) or re.search(r"Key '([^']+)' is not in struct", text)
     if key:
         dotted = key.group(1)
-        full = next((a.split("=", 1)[0].lstrip("+~") for a in argv
-                     if a.split("=", 1)[0].lstrip("+~").endswith(dotted)), dotted)
+        full = next(
+            (a.split("=", 1)[0].lstrip("+~") for a in argv if a.split("=", 1)[0].lstrip("+~").endswith(dotted)), dotted
+        )
         return key_suggestion(full)
     missing = re.search(r"Could not (?:find|load) '([^']+)/([^']+)'", text)
     if missing:
@@ -59,12 +60,13 @@ def suggestion(exc: BaseException, argv: list[str]) -> str:
         if not options:
             from hydra.core.config_store import ConfigStore
 
-            options = [o.removesuffix(".yaml") for o in ConfigStore.instance().list(group)] \
-                if ConfigStore.instance().repo.get(group) is not None else []
+            options = (
+                [o.removesuffix(".yaml") for o in ConfigStore.instance().list(group)]
+                if ConfigStore.instance().repo.get(group) is not None
+                else []
+            )
         return did_you_mean(name, options)
     return ""
-
-
 
 
 HELP = """usage: pm-design [+experiment=NAME] [key=value ...]       one study (python -m pipeline)
@@ -94,9 +96,14 @@ def print_help() -> None:
 
     summaries = experiment_summaries()
     width = max(map(len, summaries), default=0)
-    print(HELP.format(mechanisms="|".join(MECHANISMS), objectives="|".join(OBJECTIVES),
-                      optimizers="|".join(OPTIMIZERS),
-                      experiments="\n".join(f"  {name:<{width}}  {text}" for name, text in summaries.items())))
+    print(
+        HELP.format(
+            mechanisms="|".join(MECHANISMS),
+            objectives="|".join(OBJECTIVES),
+            optimizers="|".join(OPTIMIZERS),
+            experiments="\n".join(f"  {name:<{width}}  {text}" for name, text in summaries.items()),
+        )
+    )
 
 
 def evaluate_command(argv: list[str]) -> int:
@@ -127,8 +134,9 @@ def evaluate_command(argv: list[str]) -> int:
             raise ConfigError(f"{bad[0]} is invalid: allowed key=value")
         name = given.pop("mechanism", "h4")
         if name not in MECHANISMS:
-            raise ConfigError(f"mechanism={name} is invalid: allowed {', '.join(MECHANISMS)}"
-                              f"{did_you_mean(name, MECHANISMS)}")
+            raise ConfigError(
+                f"mechanism={name} is invalid: allowed {', '.join(MECHANISMS)}{did_you_mean(name, MECHANISMS)}"
+            )
         variables = [v.name for v in MECHANISMS[name].design_variables]
         if "design" in given:
             text = given.pop("design").strip("[]() ")
@@ -136,11 +144,17 @@ def evaluate_command(argv: list[str]) -> int:
         else:
             missing = [v for v in variables if v not in given]
             if missing:
-                raise ConfigError(f"{missing[0]} is missing: allowed {' '.join(f'{v}=...' for v in variables)} "
-                                  f"or design=[...] ({name}'s design variables)")
+                raise ConfigError(
+                    f"{missing[0]} is missing: allowed {' '.join(f'{v}=...' for v in variables)} "
+                    f"or design=[...] ({name}'s design variables)"
+                )
             design = [float(given.pop(v)) for v in variables]
-        overrides = [f"mechanism={name}", *(f"{k}={v}" for k, v in given.items()),
-                     "hydra.run.dir=.", "experiment_name=evaluate"]
+        overrides = [
+            f"mechanism={name}",
+            *(f"{k}={v}" for k, v in given.items()),
+            "hydra.run.dir=.",
+            "experiment_name=evaluate",
+        ]
         with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3", job_name="pm-design"):
             cfg = compose(config_name="config", overrides=overrides)
         table = evaluate_design(validate(cfg), design)

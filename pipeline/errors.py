@@ -46,17 +46,18 @@ def check_writable(field_name: str, path: str | os.PathLike) -> Path:
             break
         probe = probe.parent
     if not probe.is_dir():
-        raise ConfigError(f"{field_name}={str(path)!r} is invalid: {probe} is not a directory; "
-                          f"allowed: a writable directory")
+        raise ConfigError(
+            f"{field_name}={str(path)!r} is invalid: {probe} is not a directory; allowed: a writable directory"
+        )
     try:
         with tempfile.TemporaryFile(dir=probe):
             pass
     except OSError as exc:
-        raise ConfigError(f"{field_name}={str(path)!r} is invalid: {probe} is not writable "
-                          f"({exc.strerror or exc}); allowed: a writable directory") from None
+        raise ConfigError(
+            f"{field_name}={str(path)!r} is invalid: {probe} is not writable "
+            f"({exc.strerror or exc}); allowed: a writable directory"
+        ) from None
     return p
-
-
 
 
 class Terminated(KeyboardInterrupt):

@@ -15,8 +15,17 @@ from dataclasses import dataclass
 import numpy as np
 
 #: scalar fields of one evaluation, in column order (units: kinematics.workspace)
-EVALUATION_FIELDS = ("volume", "gdi", "inverse_condition_min", "inverse_condition_max", "suri",
-                     "reference_volume", "n_samples", "n_inside", "valid")
+EVALUATION_FIELDS = (
+    "volume",
+    "gdi",
+    "inverse_condition_min",
+    "inverse_condition_max",
+    "suri",
+    "reference_volume",
+    "n_samples",
+    "n_inside",
+    "valid",
+)
 
 
 @dataclass(frozen=True)

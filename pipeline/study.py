@@ -60,8 +60,13 @@ def parallel_backend(parallel):
         if parallel.scheduler_address:
             client, cluster = Client(parallel.scheduler_address, timeout=10), None
         else:
-            cluster = LocalCluster(n_workers=workers_for(parallel.n_jobs, parallel.n_jobs), threads_per_worker=1,
-                                   processes=True, host="127.0.0.1", dashboard_address=None)
+            cluster = LocalCluster(
+                n_workers=workers_for(parallel.n_jobs, parallel.n_jobs),
+                threads_per_worker=1,
+                processes=True,
+                host="127.0.0.1",
+                dashboard_address=None,
+            )
             client = Client(cluster)
         try:
             with parallel_config(backend="dask"):
@@ -75,8 +80,9 @@ def parallel_backend(parallel):
             yield
 
 
-def run_study(cfg: DictConfig | Config, run_dir: Path, job: int = 0, overrides: list[str] | None = None
-              ) -> dict[str, Path]:
+def run_study(
+    cfg: DictConfig | Config, run_dir: Path, job: int = 0, overrides: list[str] | None = None
+) -> dict[str, Path]:
     """Run one study into ``run_dir``; returns the paths written.
 
     Raises
@@ -93,16 +99,27 @@ def run_study(cfg: DictConfig | Config, run_dir: Path, job: int = 0, overrides: 
     config = c.result_dict()
     # the token keeps two runs of one launch and job apart (API use: tests, notebooks, reproduce)
     run_id = f"{c.config_hash()}-{launch_id()}-{job}-{secrets.token_hex(3)}"
-    manifest = {"run_id": run_id, "config_hash": c.config_hash(),
-                "launch_id": launch_id(), "job": job, "status": "running", "reason": "",
-                "overrides": list(overrides or []), "code_version": CODE_VERSION, "git_commit": git_commit(),
-                "started": time.strftime("%Y-%m-%dT%H:%M:%S"), "timings": {}, "files": [],
-                "config": config}
+    manifest = {
+        "run_id": run_id,
+        "config_hash": c.config_hash(),
+        "launch_id": launch_id(),
+        "job": job,
+        "status": "running",
+        "reason": "",
+        "overrides": list(overrides or []),
+        "code_version": CODE_VERSION,
+        "git_commit": git_commit(),
+        "started": time.strftime("%Y-%m-%dT%H:%M:%S"),
+        "timings": {},
+        "files": [],
+        "config": config,
+    }
     write_text(run_dir / MANIFEST, json.dumps(manifest, indent=1))
     try:
         paths = _compute(c, run_dir, manifest["timings"])
-        manifest.update(status="complete", files=sorted(p.name for p in paths.values()),
-                        finished=time.strftime("%Y-%m-%dT%H:%M:%S"))
+        manifest.update(
+            status="complete", files=sorted(p.name for p in paths.values()), finished=time.strftime("%Y-%m-%dT%H:%M:%S")
+        )
         write_text(run_dir / MANIFEST, json.dumps(manifest, indent=1))
     except BaseException as exc:  # noqa: BLE001 - every way out leaves a final state, then re-raises
         interrupt = interrupt_in(exc)
@@ -158,38 +175,65 @@ def _compute(c: Config, run_dir: Path, timings: dict) -> dict[str, Path]:
     with parallel_backend(c.parallel):
         t0 = time.perf_counter()
         designs = _stage("sample", sample_designs, cache_dir, mech.design, c.sample)
-        evaluated = _stage("evaluate", evaluate_designs, cache_dir, mech, c.evaluate.resolution, designs,
-                           n_jobs=n_jobs)
+        evaluated = _stage("evaluate", evaluate_designs, cache_dir, mech, c.evaluate.resolution, designs, n_jobs=n_jobs)
         timings["sample_evaluate"] = time.perf_counter() - t0
-        scores = objective_values(objective.name, evaluated[list(EVALUATION_FIELDS)].to_numpy(float),
-                                  objective.w_d)
+        scores = objective_values(objective.name, evaluated[list(EVALUATION_FIELDS)].to_numpy(float), objective.w_d)
         initial = None
         if getattr(optimizer, "seed_from_samples", False):
             order = np.argsort(-scores, kind="stable")[: int(optimizer.seed_count)]
             initial = evaluated.iloc[order][mech.design.names].to_numpy()
         t0 = time.perf_counter()
         # the reference optimum is a stage of its own: one per problem, shared by every optimiser and seed
-        reference = _stage("reference", reference_stage, cache_dir, mech, c.evaluate.resolution,
-                           c.evaluate.refine_factor, objective, n_jobs=n_jobs) if optimizer.reference else None
-        optimum = _stage("optimise", optimise_design, cache_dir, mech, c.evaluate.resolution,
-                         c.evaluate.refine_factor, objective, optimizer, initial, reference=reference,
-                         n_jobs=n_jobs)
+        reference = (
+            _stage(
+                "reference",
+                reference_stage,
+                cache_dir,
+                mech,
+                c.evaluate.resolution,
+                c.evaluate.refine_factor,
+                objective,
+                n_jobs=n_jobs,
+            )
+            if optimizer.reference
+            else None
+        )
+        optimum = _stage(
+            "optimise",
+            optimise_design,
+            cache_dir,
+            mech,
+            c.evaluate.resolution,
+            c.evaluate.refine_factor,
+            objective,
+            optimizer,
+            initial,
+            reference=reference,
+            n_jobs=n_jobs,
+        )
         timings["optimise"] = time.perf_counter() - t0
 
     _check_result(evaluated, scores, optimum["best"])
-    keys = {"config_hash": c.config_hash(), "experiment": c.experiment_name, "mechanism": mech.name,
-            "objective": objective.name, "w_d": float(objective.w_d), "optimizer": optimizer.name,
-            "seed": int(optimizer.seed)}
+    keys = {
+        "config_hash": c.config_hash(),
+        "experiment": c.experiment_name,
+        "mechanism": mech.name,
+        "objective": objective.name,
+        "w_d": float(objective.w_d),
+        "optimizer": optimizer.name,
+        "seed": int(optimizer.seed),
+    }
     units = {v.name: v.unit for v in mech.cls.design_variables}
     config = c.result_dict()
     designs_table = evaluated.copy()
     designs_table["objective_value"] = scores
-    tables = {"designs": designs_table, "history": optimum["history"],
-              "best": pd.DataFrame([optimum["best"]])}
+    tables = {"designs": designs_table, "history": optimum["history"], "best": pd.DataFrame([optimum["best"]])}
     if optimum["front"] is not None:
         tables["front"] = optimum["front"]
-    paths = {name: write_parquet(_with_keys(frame, keys), run_dir / f"{name}.parquet", config, units)
-             for name, frame in tables.items()}
+    paths = {
+        name: write_parquet(_with_keys(frame, keys), run_dir / f"{name}.parquet", config, units)
+        for name, frame in tables.items()
+    }
     if c.plot.enabled:
         t0 = time.perf_counter()
         paths.update(_plots(c, optimum, run_dir))
@@ -198,9 +242,18 @@ def _compute(c: Config, run_dir: Path, timings: dict) -> dict[str, Path]:
     timings["generation_wall_time"] = optimum["wall_time"][-1] if optimum["wall_time"] else 0.0
     best = optimum["best"]
     gap = f"; against the reference: {best['reference_gap_label']}" if best["reference_gap_label"] else ""
-    log.info("%s: %s %.6g (%s%s), V %.6g %s, GDI %.4f, SURI %.4f", c.experiment_name, objective.name,
-             best["objective_value"], best["found_by"], gap, best["volume"], best["volume_unit"], best["gdi"],
-             best["suri"])
+    log.info(
+        "%s: %s %.6g (%s%s), V %.6g %s, GDI %.4f, SURI %.4f",
+        c.experiment_name,
+        objective.name,
+        best["objective_value"],
+        best["found_by"],
+        gap,
+        best["volume"],
+        best["volume_unit"],
+        best["gdi"],
+        best["suri"],
+    )
     return paths
 
 
@@ -219,8 +272,10 @@ def _check_result(evaluated: pd.DataFrame, scores: np.ndarray, best: dict) -> No
     numeric = evaluated.loc[evaluated["valid"], [f for f in EVALUATION_FIELDS if f != "valid"]]
     bad = [name for name in numeric if not np.isfinite(numeric[name].to_numpy(float)).all()]
     if bad or not np.isfinite(scores).all():
-        raise RunError(f"degenerate result: non-finite {', '.join(bad) or 'objective_value'} among the sampled "
-                       f"designs (check mechanism.fixed against the mechanism's ranges)")
+        raise RunError(
+            f"degenerate result: non-finite {', '.join(bad) or 'objective_value'} among the sampled "
+            f"designs (check mechanism.fixed against the mechanism's ranges)"
+        )
     for name in ("objective_value", "objective_value_refined", "volume", "volume_refined", "gdi", "suri"):
         value = best.get(name)
         if value is not None and not np.isfinite(float(value)):
@@ -252,13 +307,10 @@ def _with_keys(frame: pd.DataFrame, keys: dict) -> pd.DataFrame:
 
 def _plots(c: Config, optimum: dict, run_dir: Path) -> dict[str, Path]:
     """The run's figures: a cached stage (drawn once per result), written into ``run_dir``."""
-    figures = _stage("plot", run_figures, c.paths.cache_dir, c.mechanism, c.objective, c.optimizer, c.plot,
-                     optimum)
+    figures = _stage("plot", run_figures, c.paths.cache_dir, c.mechanism, c.objective, c.optimizer, c.plot, optimum)
     out = {}
     for name, data in figures.items():
         path = write_bytes(run_dir / name, data)
         if path.suffix == ".png":
             out[path.stem] = path
     return out
-
-

@@ -11,12 +11,14 @@ from kinematics import get_mechanism
 PAPER_DESIGNS = {
     "h4": dict(d=6.0, h=6.0, Qz=42.0),  # seed 000 eq. 25
     "tricept": dict(a=250.0, b=400.0, d=100.0),  # inside seed 001 Table 1 bounds
-    "rpr3": dict(base=[[0, 0], [200, 0], [0, 200]], platform=[[0, 0], [50, 0], [40, 40]],
-                 rho_min=80.0, rho_max=160.0),  # seed 003 Sec. 5.2-5.4
+    "rpr3": dict(
+        base=[[0, 0], [200, 0], [0, 200]], platform=[[0, 0], [50, 0], [40, 40]], rho_min=80.0, rho_max=160.0
+    ),  # seed 003 Sec. 5.2-5.4
     "rpr2": dict(b=5.0, q_min=6.0, q_max=9.6),  # seed 004
     "delta": dict(R=200.0, r=50.0, la=200.0, lb=400.0),  # kinematics/delta.py
-    "gough_stewart": dict(r_base=400.0, r_platform=250.0, sep_base=30.0, sep_platform=30.0,
-                          height=700.0),  # kinematics/gough_stewart.py, docs/gough_stewart.md
+    "gough_stewart": dict(
+        r_base=400.0, r_platform=250.0, sep_base=30.0, sep_platform=30.0, height=700.0
+    ),  # kinematics/gough_stewart.py, docs/gough_stewart.md
 }
 
 #: a box of poses (lower, upper) per mechanism where most poses are reachable

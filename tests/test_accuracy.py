@@ -67,8 +67,9 @@ def test_rpr2_area_to_5e4_at_half_the_default():
 def test_rpr3_constant_orientation_area_to_1e3_at_half_the_default(degrees):
     m = get_mechanism("rpr3", **PAPER_DESIGNS["rpr3"])
     phi = math.radians(degrees)
-    ev = evaluate(m, orientation=(phi, phi), min_inverse_condition=0.0, resolution=90, error_estimate=False,
-                  method="grid")
+    ev = evaluate(
+        m, orientation=(phi, phi), min_inverse_condition=0.0, resolution=90, error_estimate=False, method="grid"
+    )
     assert ev.volume == pytest.approx(m.exact_area(phi), rel=1e-3)
 
 
@@ -130,11 +131,23 @@ def has_a_step(eta: np.ndarray) -> bool:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", [
-    "h4", "tricept", "delta", "rpr2",
-    pytest.param("rpr3", marks=pytest.mark.xfail(strict=True, reason="3-RPR: changes of 6e-4 of eta between "
-                                                 "neighbours of a 2e-4 trend (noise of the grid, cause open)")),
-])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "h4",
+        "tricept",
+        "delta",
+        "rpr2",
+        pytest.param(
+            "rpr3",
+            marks=pytest.mark.xfail(
+                strict=True,
+                reason="3-RPR: changes of 6e-4 of eta between "
+                "neighbours of a 2e-4 trend (noise of the grid, cause open)",
+            ),
+        ),
+    ],
+)
 def test_eta_along_a_line_has_no_steps(name):
     assert not has_a_step(eta_along_a_line(name, "grid"))
 

@@ -13,8 +13,11 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 #: dependencies whose underscore names are their private internals: we import none of them
 GUARDED = ("hydra", "joblib", "loky", "omegaconf")
-SOURCES = [p for folder in ("pipeline", "kinematics", "hydra_plugins", "benchmarks")
-           for p in sorted((ROOT / folder).rglob("*.py"))]
+SOURCES = [
+    p
+    for folder in ("pipeline", "kinematics", "hydra_plugins", "benchmarks")
+    for p in sorted((ROOT / folder).rglob("*.py"))
+]
 
 
 def private_imports(source: str) -> list[str]:
@@ -51,17 +54,43 @@ def test_the_private_import_check_catches_what_it_should():
 STILL_PRIVATE: set[str] = set()
 
 
-@pytest.mark.parametrize("path", [pytest.param(p, marks=pytest.mark.xfail(strict=True, reason="private API, issue 22"))
-                                  if str(p.relative_to(ROOT)) in STILL_PRIVATE else p for p in SOURCES],
-                         ids=[str(p.relative_to(ROOT)) for p in SOURCES])
+@pytest.mark.parametrize(
+    "path",
+    [
+        pytest.param(p, marks=pytest.mark.xfail(strict=True, reason="private API, issue 22"))
+        if str(p.relative_to(ROOT)) in STILL_PRIVATE
+        else p
+        for p in SOURCES
+    ],
+    ids=[str(p.relative_to(ROOT)) for p in SOURCES],
+)
 def test_no_private_api_of_hydra_joblib_loky_omegaconf(path):
     assert private_imports(path.read_text()) == []
 
 
-@pytest.mark.skipif(shutil.which("lint-imports") is None and not (Path(sys.executable).parent / "lint-imports").exists(),
-                    reason="import-linter not installed (pip install -e '.[dev]')")
+@pytest.mark.skipif(
+    shutil.which("lint-imports") is None and not (Path(sys.executable).parent / "lint-imports").exists(),
+    reason="import-linter not installed (pip install -e '.[dev]')",
+)
 def test_layer_contract_holds():
     exe = Path(sys.executable).parent / "lint-imports"
-    proc = subprocess.run([str(exe) if exe.exists() else "lint-imports", "--no-cache"], cwd=ROOT,
-                          capture_output=True, text=True, timeout=120)
+    proc = subprocess.run(
+        [str(exe) if exe.exists() else "lint-imports", "--no-cache"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-2000:]
+
+
+def _tool(name: str) -> str | None:
+    exe = Path(sys.executable).parent / name
+    return str(exe) if exe.exists() else shutil.which(name)
+
+
+@pytest.mark.skipif(_tool("ruff") is None, reason="ruff not installed (pip install -e '.[dev]')")
+@pytest.mark.parametrize("command", [["check", "."], ["format", "--check", "."]], ids=["lint", "format"])
+def test_ruff_is_clean(command):
+    proc = subprocess.run([_tool("ruff"), *command], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-1000:]

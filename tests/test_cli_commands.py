@@ -20,8 +20,19 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def test_evaluate_one_design_prints_a_table_and_writes_parquet(tmp_path, capsys):
     out = tmp_path / "design.parquet"
-    code = evaluate_command(["mechanism=tricept", "a=250", "b=400", "d=100", "evaluate.resolution=16",
-                             "evaluate.allow_coarse=true", "objective.w_d=0.3", "--parquet", str(out)])
+    code = evaluate_command(
+        [
+            "mechanism=tricept",
+            "a=250",
+            "b=400",
+            "d=100",
+            "evaluate.resolution=16",
+            "evaluate.allow_coarse=true",
+            "objective.w_d=0.3",
+            "--parquet",
+            str(out),
+        ]
+    )
     printed = capsys.readouterr().out
     assert code == 0, printed
     row = pd.read_parquet(out).iloc[0]
@@ -34,24 +45,30 @@ def test_evaluate_one_design_prints_a_table_and_writes_parquet(tmp_path, capsys)
     assert "volume" in printed and "mm·rad²" in printed and "eta" in printed
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["mechanism=tricpt", "a=250", "b=400", "d=100"], "did you mean tricept?"),
-    (["mechanism=tricept", "a=250", "b=400"], "d is missing"),
-    (["mechanism=tricept", "a=900", "b=400", "d=100"], "a=900.0 is invalid"),
-    (["mechanism=rpr2", "design=[1,2,3]"], "design="),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["mechanism=tricpt", "a=250", "b=400", "d=100"], "did you mean tricept?"),
+        (["mechanism=tricept", "a=250", "b=400"], "d is missing"),
+        (["mechanism=tricept", "a=900", "b=400", "d=100"], "a=900.0 is invalid"),
+        (["mechanism=rpr2", "design=[1,2,3]"], "design="),
+    ],
+)
 def test_evaluate_refuses_bad_input_in_one_line(argv, message, capsys):
     assert evaluate_command(argv) == 2
     err = capsys.readouterr().err.strip()
     assert message in err and err.startswith("error:") and "\n" not in err
 
 
-@pytest.mark.parametrize("override, hint", [
-    ("objective.wd=0.5", "did you mean objective.w_d?"),     # Hydra alone advises "+objective.wd"
-    ("+objective.wd=0.5", "did you mean objective.w_d?"),
-    ("mechanism=tricpt", "did you mean tricept?"),
-    ("+experiment=h4_mxed", "did you mean h4_mixed?"),
-])
+@pytest.mark.parametrize(
+    "override, hint",
+    [
+        ("objective.wd=0.5", "did you mean objective.w_d?"),  # Hydra alone advises "+objective.wd"
+        ("+objective.wd=0.5", "did you mean objective.w_d?"),
+        ("mechanism=tricpt", "did you mean tricept?"),
+        ("+experiment=h4_mxed", "did you mean h4_mixed?"),
+    ],
+)
 def test_unknown_keys_and_names_get_a_did_you_mean(override, hint, capsys):
     register_configs()
     with pytest.raises(SystemExit) as exit_info:
@@ -66,18 +83,24 @@ def test_help_names_every_experiment_with_one_line(capsys):
     text = capsys.readouterr().out
     for path in sorted((CONFIG_DIR / "experiment").glob("*.yaml")):
         line = next(ln for ln in text.splitlines() if ln.strip().startswith(path.stem + " "))
-        assert len(line.split(None, 1)[1]) > 15, line   # says what it is
+        assert len(line.split(None, 1)[1]) > 15, line  # says what it is
     for command in ("evaluate", "aggregate", "report"):
         assert f"pm-design {command}" in text
 
 
 @pytest.mark.slow
 def test_console_help_and_subcommands_run_before_hydra(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "pipeline", "--help"], capture_output=True, text=True,
-                          cwd=tmp_path, timeout=120)
+    proc = subprocess.run(
+        [sys.executable, "-m", "pipeline", "--help"], capture_output=True, text=True, cwd=tmp_path, timeout=120
+    )
     assert proc.returncode == 0 and "h4_table3" in proc.stdout, proc.stderr
-    proc = subprocess.run([sys.executable, "-m", "pipeline", "report", "nowhere"], capture_output=True, text=True,
-                          cwd=tmp_path, timeout=120)
+    proc = subprocess.run(
+        [sys.executable, "-m", "pipeline", "report", "nowhere"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        timeout=120,
+    )
     assert proc.returncode == 2 and proc.stderr.startswith("error: source='nowhere'"), proc.stderr
 
 

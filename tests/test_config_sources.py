@@ -54,8 +54,11 @@ def _study_key(cfg) -> str:
 
 
 def _includes(name: str) -> list[str]:
-    return [d for d in (yaml.safe_load((CONFIG_DIR / "experiment" / f"{name}.yaml").read_text()).get("defaults") or [])
-            if isinstance(d, str)]
+    return [
+        d
+        for d in (yaml.safe_load((CONFIG_DIR / "experiment" / f"{name}.yaml").read_text()).get("defaults") or [])
+        if isinstance(d, str)
+    ]
 
 
 def test_no_two_experiments_define_the_same_study():
@@ -80,4 +83,6 @@ def test_mechanism_defaults_are_written_once():
         for key, value in cls.default_fixed.items():
             default = params[key].default if key in params else inspect.Parameter.empty
             if default is not inspect.Parameter.empty:
-                assert default == value, f"{name}: {key} defaults to {default!r} in __init__, {value!r} in default_fixed"
+                assert default == value, (
+                    f"{name}: {key} defaults to {default!r} in __init__, {value!r} in default_fixed"
+                )

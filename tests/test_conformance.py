@@ -58,8 +58,7 @@ def test_inert_design_variable_is_the_one_failure():
 
 
 def test_wrong_output_shape_is_the_one_failure():
-    assert check_mechanism(FlatJacobian) == ["shapes: jacobian of 512 poses has shape (512, 4); "
-                                             "expected (512, 2, 2)"]
+    assert check_mechanism(FlatJacobian) == ["shapes: jacobian of 512 poses has shape (512, 4); expected (512, 2, 2)"]
 
 
 def test_assert_conforms_lists_every_failure():
@@ -82,11 +81,14 @@ class BadName(RPR2):
     name = "two words"
 
 
-@pytest.mark.parametrize("cls, line", [
-    (NoUnit, "attributes: design variable 'b' declares no unit"),
-    (EmptyBox, "attributes: design variable 'q_min' needs finite lower < upper; got [9.0, 3.0]"),
-    (BadName, "attributes: name must be an identifier string (the registry name); got 'two words'"),
-])
+@pytest.mark.parametrize(
+    "cls, line",
+    [
+        (NoUnit, "attributes: design variable 'b' declares no unit"),
+        (EmptyBox, "attributes: design variable 'q_min' needs finite lower < upper; got [9.0, 3.0]"),
+        (BadName, "attributes: name must be an identifier string (the registry name); got 'two words'"),
+    ],
+)
 def test_attribute_defects(cls, line):
     assert check_mechanism(cls) == [line]
 
@@ -119,6 +121,7 @@ class StaleCompiledKernel(RPR2):
     def _compiled_reachable_jacobian(self, poses, column_scale):
         # the compiled path forgot that q_max is a design parameter
         from kinematics.rpr2 import _rpr2_reachable_jacobians
+
         return _rpr2_reachable_jacobians(poses, self.b, self.q_min, 9.0, column_scale)
 
 
@@ -131,14 +134,20 @@ class NotBuildableAtBound(RPR2):
         super().__init__(b, q_min, q_max)
 
 
-@pytest.mark.parametrize("cls, prefix", [
-    (OneBranchForward, "ik-fk: forward(inverse(x)) does not contain x at "),
-    (SmallPoseBox, "pose-bounds: "),
-    (BatchDependent, "batch: inverse of pose 0 alone differs from row 0"),
-    (StaleCompiledKernel, "workspace: the compiled path gives (V, GDI, SURI)"),
-    (NotBuildableAtBound, "build: design with 'b' at its upper bound 10 (others at the centre) does not build: "
-                          "ValueError: b = 10.0 mm is too long"),
-])
+@pytest.mark.parametrize(
+    "cls, prefix",
+    [
+        (OneBranchForward, "ik-fk: forward(inverse(x)) does not contain x at "),
+        (SmallPoseBox, "pose-bounds: "),
+        (BatchDependent, "batch: inverse of pose 0 alone differs from row 0"),
+        (StaleCompiledKernel, "workspace: the compiled path gives (V, GDI, SURI)"),
+        (
+            NotBuildableAtBound,
+            "build: design with 'b' at its upper bound 10 (others at the centre) does not build: "
+            "ValueError: b = 10.0 mm is too long",
+        ),
+    ],
+)
 def test_each_check_catches_its_defect(cls, prefix):
     failures = check_mechanism(cls)
     assert any(line.startswith(prefix) for line in failures), failures
@@ -162,7 +171,8 @@ def test_a_design_that_does_not_pickle():
 
     assert check_mechanism(Local) == [
         "build: the design does not pickle (worker processes need it): AttributeError: Can't pickle local "
-        "object 'test_a_design_that_does_not_pickle.<locals>.Local'"]
+        "object 'test_a_design_that_does_not_pickle.<locals>.Local'"
+    ]
 
 
 def test_not_a_mechanism():

@@ -14,10 +14,10 @@ import pytest
 from hydra import compose, initialize_config_dir
 
 import pipeline.stages.aggregate as aggregate_module
-from pipeline.stages.aggregate import aggregate
 from pipeline.config import CONFIG_DIR, register_configs
-from pipeline.store.runs import launch_id
 from pipeline.errors import RunError
+from pipeline.stages.aggregate import aggregate
+from pipeline.store.runs import launch_id
 from pipeline.study import run_study
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -38,9 +38,23 @@ def snapshot(dataset: Path) -> dict[str, bytes]:
 
 def test_readme_sweep_and_read_returns_every_column_of_four_mechanisms(tmp_path):
     out = tmp_path / "outputs"
-    proc = subprocess.run([sys.executable, "-m", "pipeline", "-m", "objective.name=mixed", "objective.w_d=0.5",
-                           "mechanism=h4,tricept,rpr3,rpr2", *TINY, f"paths.output_dir={out}"],
-                          cwd=ROOT, capture_output=True, text=True, timeout=600)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pipeline",
+            "-m",
+            "objective.name=mixed",
+            "objective.w_d=0.5",
+            "mechanism=h4,tricept,rpr3,rpr2",
+            *TINY,
+            f"paths.output_dir={out}",
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
     assert proc.returncode == 0, proc.stderr[-3000:]
     best = pd.read_parquet(out / "dataset" / "best")  # as README tells users to read it
     assert sorted(best["mechanism"]) == ["h4", "rpr2", "rpr3", "tricept"]
@@ -120,8 +134,9 @@ def test_a_failure_midway_leaves_the_previous_dataset_intact(tmp_path, monkeypat
     with pytest.raises(RunError):
         aggregate(tmp_path / "s2", dataset)
     assert snapshot(dataset) == before
-    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".dataset.")
-                and not p.name.endswith(".lock")]  # no staging left
+    assert not [
+        p for p in tmp_path.iterdir() if p.name.startswith(".dataset.") and not p.name.endswith(".lock")
+    ]  # no staging left
     monkeypatch.setattr(aggregate_module, "write_table", real)
     aggregate(tmp_path / "s2", dataset)
     best = pd.read_parquet(dataset / "best")

@@ -45,8 +45,7 @@ def test_jacobian_matches_finite_differences():
     x = x[np.all(np.isfinite(delta.inverse(x)), axis=1)]
     jac = delta.jacobian(x)
     eps = 1e-5
-    fd = np.stack([(delta.inverse(x + eps * e) - delta.inverse(x - eps * e)) / (2 * eps) for e in np.eye(3)],
-                  axis=-1)
+    fd = np.stack([(delta.inverse(x + eps * e) - delta.inverse(x - eps * e)) / (2 * eps) for e in np.eye(3)], axis=-1)
     assert np.max(np.abs(jac - fd)) < 1e-7
 
 
@@ -55,9 +54,9 @@ def test_vectorised_equals_one_at_a_time():
     x = poses(40, 3)
     q_all, j_all, ic_all = delta.inverse(x), delta.jacobian(x), delta.inverse_condition(x)
     for k in range(len(x)):
-        np.testing.assert_array_equal(delta.inverse(x[k]), q_all[k:k + 1])
-        np.testing.assert_array_equal(delta.jacobian(x[k]), j_all[k:k + 1])
-        np.testing.assert_array_equal(delta.inverse_condition(x[k]), ic_all[k:k + 1])
+        np.testing.assert_array_equal(delta.inverse(x[k]), q_all[k : k + 1])
+        np.testing.assert_array_equal(delta.jacobian(x[k]), j_all[k : k + 1])
+        np.testing.assert_array_equal(delta.inverse_condition(x[k]), ic_all[k : k + 1])
 
 
 def test_limits_and_workspace():

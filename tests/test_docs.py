@@ -12,7 +12,8 @@ ROOT = Path(__file__).resolve().parents[1]
 def test_configuration_reference_is_current():
     committed = (ROOT / "docs" / "configuration.md").read_text()
     assert committed == reference_page(), (
-        "docs/configuration.md is stale: regenerate it with `python -m pipeline.report.reference`")
+        "docs/configuration.md is stale: regenerate it with `python -m pipeline.report.reference`"
+    )
 
 
 def test_every_experiment_has_a_one_line_summary():

@@ -27,8 +27,11 @@ def percent_to_notebook(path: Path):
     def flush():
         text = "\n".join(lines).strip("\n")
         if kind == "markdown":
-            cells.append(nbformat.v4.new_markdown_cell("\n".join(ln[2:] if ln.startswith("# ") else ln.lstrip("#")
-                                                                 for ln in text.splitlines())))
+            cells.append(
+                nbformat.v4.new_markdown_cell(
+                    "\n".join(ln[2:] if ln.startswith("# ") else ln.lstrip("#") for ln in text.splitlines())
+                )
+            )
         elif kind == "code" and text:
             cells.append(nbformat.v4.new_code_cell(text))
 
@@ -39,9 +42,9 @@ def percent_to_notebook(path: Path):
         else:
             lines.append(line)
     flush()
-    return nbformat.v4.new_notebook(cells=cells, metadata={"kernelspec": {"name": "python3",
-                                                                          "display_name": "Python 3",
-                                                                          "language": "python"}})
+    return nbformat.v4.new_notebook(
+        cells=cells, metadata={"kernelspec": {"name": "python3", "display_name": "Python 3", "language": "python"}}
+    )
 
 
 def assert_figure(path: Path) -> None:
@@ -57,12 +60,12 @@ def test_example_notebook_runs_in_a_jupyter_kernel(tmp_path, monkeypatch):
     monkeypatch.setenv("PM_DESIGN_EXAMPLE_OUT", str(out))
     notebook = percent_to_notebook(EXAMPLE)
     assert sum(c.cell_type == "code" for c in notebook.cells) >= 4
-    NotebookClient(notebook, timeout=600, kernel_name="python3",
-                   resources={"metadata": {"path": str(tmp_path)}}).execute()
+    NotebookClient(
+        notebook, timeout=600, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}}
+    ).execute()
     outputs = "".join(o.get("text", "") for c in notebook.cells if c.cell_type == "code" for o in c.outputs)
-    assert "wrote" in outputs and "mm" in outputs   # the units read back with the dataset
-    html = [o for c in notebook.cells if c.cell_type == "code" for o in c.outputs
-            if "text/html" in o.get("data", {})]
+    assert "wrote" in outputs and "mm" in outputs  # the units read back with the dataset
+    html = [o for c in notebook.cells if c.cell_type == "code" for o in c.outputs if "text/html" in o.get("data", {})]
     assert html, "the dataset table is displayed as a DataFrame"
     assert_figure(out / "tradeoff_example.png")
     assert next((out / "sweeps").rglob("report.html")).stat().st_size > 10_000
@@ -70,8 +73,9 @@ def test_example_notebook_runs_in_a_jupyter_kernel(tmp_path, monkeypatch):
 
 @pytest.mark.slow
 def test_example_runs_as_a_script_from_a_fresh_folder(tmp_path):
-    proc = subprocess.run([sys.executable, str(EXAMPLE), "results"], capture_output=True, text=True,
-                          cwd=tmp_path, timeout=600)
+    proc = subprocess.run(
+        [sys.executable, str(EXAMPLE), "results"], capture_output=True, text=True, cwd=tmp_path, timeout=600
+    )
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert_figure(tmp_path / "results" / "tradeoff_example.png")
 

@@ -140,12 +140,22 @@ def test_installed_package_runs_through_the_cli_into_one_dataset(tmp_path):
     source = tmp_path / "src"
     shutil.copytree(EXAMPLE, source, ignore=shutil.ignore_patterns("build", "*.egg-info"))
     target = tmp_path / "site"
-    run([sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--target", str(target), str(source)],
-        dict(os.environ), tmp_path)
+    run(
+        [sys.executable, "-m", "pip", "install", "--quiet", "--no-deps", "--target", str(target), str(source)],
+        dict(os.environ),
+        tmp_path,
+    )
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(target), str(ROOT)])}
-    probe = run([sys.executable, "-c",
-                 "import kinematics, kinematics.testing as t; c = kinematics.MECHANISMS['five_bar']; "
-                 "print(c.__module__, t.check_mechanism(c), kinematics.plugins.config_search_paths())"], env, tmp_path)
+    probe = run(
+        [
+            sys.executable,
+            "-c",
+            "import kinematics, kinematics.testing as t; c = kinematics.MECHANISMS['five_bar']; "
+            "print(c.__module__, t.check_mechanism(c), kinematics.plugins.config_search_paths())",
+        ],
+        env,
+        tmp_path,
+    )
     assert probe.stdout.split("\n")[0] == "pm_five_bar.mechanism [] ['pkg://pm_five_bar.conf']"
     out = tmp_path / "outputs"
     tiny = ["+debug=fast", "optimizer.population=4", "optimizer.generations=2", f"paths.output_dir={out}"]

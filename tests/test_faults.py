@@ -34,10 +34,15 @@ def interruptible() -> None:
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
-def run_cli(args: list[str], out: Path, module: str = "pipeline", timeout: float = 300
-            ) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", module, *args], cwd=ROOT, capture_output=True, text=True,
-                          timeout=timeout, env={**os.environ, "PYTHONUNBUFFERED": "1"})
+def run_cli(args: list[str], out: Path, module: str = "pipeline", timeout: float = 300) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", module, *args],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
 
 
 def files_under(path: Path) -> list[Path]:
@@ -111,8 +116,11 @@ SINGLE_RUN_REFUSALS = [
     ("n_jobs 0", ["parallel.n_jobs=0"], "parallel.n_jobs"),
     ("unknown backend", ["parallel.backend=mpi"], "parallel.backend"),
     ("malformed scheduler address", ["parallel.scheduler_address=somewhere"], "parallel.scheduler_address"),
-    ("unreachable dask scheduler", ["parallel.backend=dask", "parallel.scheduler_address=tcp://127.0.0.1:1"],
-     "parallel.scheduler_address"),
+    (
+        "unreachable dask scheduler",
+        ["parallel.backend=dask", "parallel.scheduler_address=tcp://127.0.0.1:1"],
+        "parallel.scheduler_address",
+    ),
     ("experiment name escaping", ["experiment_name=a/../../x"], "experiment_name"),
     ("experiment name empty", ["experiment_name="], "experiment_name"),
     ("design bounds crossed", ["mechanism.design.lower=[0.2,0.01,0.35]"], "mechanism.design bounds of d_ratio"),
@@ -132,8 +140,9 @@ SINGLE_RUN_REFUSALS = [
 ]
 
 
-@pytest.mark.parametrize("overrides, field", [c[1:] for c in SINGLE_RUN_REFUSALS],
-                         ids=[c[0] for c in SINGLE_RUN_REFUSALS])
+@pytest.mark.parametrize(
+    "overrides, field", [c[1:] for c in SINGLE_RUN_REFUSALS], ids=[c[0] for c in SINGLE_RUN_REFUSALS]
+)
 def test_single_run_refusal(overrides, field, tmp_path):
     out = tmp_path / "out"
     proc = run_cli(["+experiment=h4_mixed", f"paths.output_dir={out}", *overrides], out)
@@ -165,11 +174,25 @@ def test_dask_not_installed_is_one_line(tmp_path):
         "    def find_spec(self, name, path=None, target=None):\n"
         "        if name.split('.')[0] in ('distributed', 'dask'):\n"
         "            raise ModuleNotFoundError(f'No module named {name!r}', name=name)\n"
-        "sys.meta_path.insert(0, _Hide())\n")
+        "sys.meta_path.insert(0, _Hide())\n"
+    )
     env = {**os.environ, "PYTHONPATH": str(shim)}
-    proc = subprocess.run([sys.executable, "-m", "pipeline", "+experiment=h4_mixed", *TINY,
-                           f"paths.output_dir={out}", "parallel.backend=dask"], cwd=ROOT, capture_output=True,
-                          text=True, env=env, timeout=120)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pipeline",
+            "+experiment=h4_mixed",
+            *TINY,
+            f"paths.output_dir={out}",
+            "parallel.backend=dask",
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=120,
+    )
     assert proc.returncode == 2
     assert_one_error_line(proc, "parallel.backend")
     assert not out.exists()
@@ -177,8 +200,16 @@ def test_dask_not_installed_is_one_line(tmp_path):
 
 def test_reused_run_dir_is_refused_and_kept(existing_run, tmp_path):
     before = {p: p.read_bytes() for p in files_under(existing_run)}
-    proc = run_cli(["+experiment=rpr2_mixed", *TINY, f"paths.output_dir={tmp_path}",
-                    f"hydra.run.dir={existing_run}", "objective.w_d=0.9"], tmp_path)
+    proc = run_cli(
+        [
+            "+experiment=rpr2_mixed",
+            *TINY,
+            f"paths.output_dir={tmp_path}",
+            f"hydra.run.dir={existing_run}",
+            "objective.w_d=0.9",
+        ],
+        tmp_path,
+    )
     assert proc.returncode == 2
     assert_one_error_line(proc, "hydra.run.dir")
     assert {p: p.read_bytes() for p in files_under(existing_run)} == before
@@ -205,19 +236,31 @@ def test_reused_sweep_dir_is_refused(tmp_path):
     sweep = tmp_path / "sweep"
     sweep.mkdir()
     (sweep / "old.txt").write_text("earlier sweep")
-    proc = run_cli(["-m", "+experiment=h4_mixed", *TINY, f"paths.output_dir={tmp_path}",
-                    f"hydra.sweep.dir={sweep}", "objective.w_d=0,1"], tmp_path)
+    proc = run_cli(
+        [
+            "-m",
+            "+experiment=h4_mixed",
+            *TINY,
+            f"paths.output_dir={tmp_path}",
+            f"hydra.sweep.dir={sweep}",
+            "objective.w_d=0,1",
+        ],
+        tmp_path,
+    )
     assert proc.returncode == 2
     assert_one_error_line(proc, "hydra.sweep.dir")
     assert [p.name for p in sweep.iterdir()] == ["old.txt"]
 
 
-@pytest.mark.parametrize("args, pattern, code", [
-    (["{missing}"], "source", 2),
-    (["{run}", "--dataset", "{file}"], "--dataset", 2),
-    (["{run}", "--dataset", "/sys/pm-design-dataset"], "--dataset", 2),
-    (["{run}", "--dataset", "{foreign}"], "--dataset", 2),
-])
+@pytest.mark.parametrize(
+    "args, pattern, code",
+    [
+        (["{missing}"], "source", 2),
+        (["{run}", "--dataset", "{file}"], "--dataset", 2),
+        (["{run}", "--dataset", "/sys/pm-design-dataset"], "--dataset", 2),
+        (["{run}", "--dataset", "{foreign}"], "--dataset", 2),
+    ],
+)
 def test_aggregate_cli_refusals(args, pattern, code, existing_run, tmp_path):
     file = tmp_path / "f.txt"
     file.write_text("x")
@@ -234,11 +277,25 @@ def test_aggregate_cli_refusals(args, pattern, code, existing_run, tmp_path):
 # ------------------------------------------------- failures while computing
 def test_ctrl_c_stops_with_one_line_and_no_workers_left(tmp_path):
     out = tmp_path / "out"
-    proc = subprocess.Popen([sys.executable, "-m", "pipeline", "+experiment=h4_mixed", f"paths.output_dir={out}",
-                             "sample.n=8", "optimizer.generations=100", "plot.enabled=false"],
-                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True, preexec_fn=interruptible,
-                            env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "pipeline",
+            "+experiment=h4_mixed",
+            f"paths.output_dir={out}",
+            "sample.n=8",
+            "optimizer.generations=100",
+            "plot.enabled=false",
+        ],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        preexec_fn=interruptible,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
     deadline = time.time() + 120
     manifest = None
     while time.time() < deadline:
@@ -267,14 +324,28 @@ def test_ctrl_c_while_the_workers_start(delay, tmp_path):
     main process is compiling the kernels meanwhile, as on a new machine. Before the
     fixes: a worker's own KeyboardInterrupt traceback (8 runs in 8), and a Ctrl-C that
     landed in llvmlite's compile callback was swallowed and the run went on."""
-    proc = subprocess.Popen([sys.executable, "-m", "pipeline", "+experiment=h4_mixed",
-                             f"paths.output_dir={tmp_path / 'out'}", "sample.n=8", "plot.enabled=false"],
-                            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True, preexec_fn=interruptible,
-                            env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")})
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "pipeline",
+            "+experiment=h4_mixed",
+            f"paths.output_dir={tmp_path / 'out'}",
+            "sample.n=8",
+            "plot.enabled=false",
+        ],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        preexec_fn=interruptible,
+        env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")},
+    )
     deadline = time.time() + 120
     while time.time() < deadline and not any(
-            b"popen_loky_posix" in _cmdline(pid) for pid in _processes_in_session(proc.pid)):
+        b"popen_loky_posix" in _cmdline(pid) for pid in _processes_in_session(proc.pid)
+    ):
         time.sleep(0.005)
     time.sleep(delay)
     os.killpg(proc.pid, signal.SIGINT)
@@ -323,8 +394,9 @@ def test_disk_full_marks_no_run_complete(monkeypatch, tmp_path, capsys):
 
     monkeypatch.setattr(pq, "write_table", full)
     out = tmp_path / "out"
-    code = _hydra_main(monkeypatch, ["+experiment=rpr2_mixed", *TINY, f"paths.output_dir={out}",
-                                     f"hydra.run.dir={out}/run"])
+    code = _hydra_main(
+        monkeypatch, ["+experiment=rpr2_mixed", *TINY, f"paths.output_dir={out}", f"hydra.run.dir={out}/run"]
+    )
     err = capsys.readouterr().err
     assert code == 1
     line = [ln for ln in err.splitlines() if ln.startswith("error:")]
@@ -346,8 +418,9 @@ def test_a_job_failing_at_run_time_does_not_lose_the_sweep(monkeypatch, tmp_path
 
     monkeypatch.setattr(run_module, "optimise_design", flaky)
     out = tmp_path / "out"
-    code = _hydra_main(monkeypatch, ["-m", "+experiment=rpr2_mixed", *TINY, f"paths.output_dir={out}",
-                                     "objective.w_d=0,0.5,1"])
+    code = _hydra_main(
+        monkeypatch, ["-m", "+experiment=rpr2_mixed", *TINY, f"paths.output_dir={out}", "objective.w_d=0,0.5,1"]
+    )
     err = capsys.readouterr().err
     assert code == 1
     line = [ln for ln in err.splitlines() if ln.startswith("error:")]
@@ -379,7 +452,8 @@ def test_workers_never_see_ctrl_c(tmp_path):
         "kids = open(f'/proc/{os.getpid()}/task/{os.getpid()}/children').read().split()\n"
         "pids = [p for p in kids if 'LokyProcess' in open(f'/proc/{p}/cmdline').read()]\n"
         "print(len(pids) == worker_count(3) - 1, all(blocked(p) for p in pids), "
-        "signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, []))\n")
+        "signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, []))\n"
+    )
     proc = subprocess.run([sys.executable, str(script)], cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split() == ["True", "True", "False"]
@@ -400,7 +474,8 @@ def test_ctrl_c_during_kernel_compilation_is_deferred_not_lost(tmp_path):
         "    print('not interrupted', flush=True)\n"
         "except KeyboardInterrupt:\n"
         "    print('interrupted after the block', flush=True)\n"
-        "print(signal.getsignal(signal.SIGINT) is signal.default_int_handler)\n")
+        "print(signal.getsignal(signal.SIGINT) is signal.default_int_handler)\n"
+    )
     proc = subprocess.run([sys.executable, str(script)], cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split("\n")[:3] == ["block finished", "interrupted after the block", "True"]
@@ -420,10 +495,17 @@ def test_workers_of_a_killed_run_exit(tmp_path):
         "objective.DesignEvaluator(MechanismConfig(name='rpr2'), 40, 2).evaluate(designs)\n"
         "kids = open(f'/proc/{os.getpid()}/task/{os.getpid()}/children').read().split()\n"
         "print(os.getpid(), *[p for p in kids if 'LokyProcess' in open(f'/proc/{p}/cmdline').read()], flush=True)\n"
-        "os.kill(os.getpid(), 9)\n")
+        "os.kill(os.getpid(), 9)\n"
+    )
     # the workers inherit the pipes, so wait for the process, not for the end of its output
-    proc = subprocess.Popen([sys.executable, str(script)], cwd=ROOT, stdout=subprocess.PIPE,
-                            stderr=subprocess.DEVNULL, text=True, start_new_session=True)
+    proc = subprocess.Popen(
+        [sys.executable, str(script)],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+        start_new_session=True,
+    )
     session, *worker_pids = map(int, proc.stdout.readline().split())  # the killed process led its own session
     assert len(worker_pids) == 1  # n_jobs=2: this process and one worker
     assert proc.wait(timeout=120) == -signal.SIGKILL

@@ -56,8 +56,15 @@ def check_figure(fig: Figure) -> None:
 def test_run_workspace_figures_state_the_design_volume(name, tmp_path, saved):
     config = MechanismConfig(name=name)
     mech = config.build(config.centre)
-    plot_module.plot_workspace(mech, config.orientation_rad() or mech.default_orientation, 0.01, None, tmp_path,
-                               f"{name}, test", design_volume="design's V = 1 u")
+    plot_module.plot_workspace(
+        mech,
+        config.orientation_rad() or mech.default_orientation,
+        0.01,
+        None,
+        tmp_path,
+        f"{name}, test",
+        design_volume="design's V = 1 u",
+    )
     assert len(saved) == 2
     for fig in saved:
         check_figure(fig)
@@ -65,17 +72,32 @@ def test_run_workspace_figures_state_the_design_volume(name, tmp_path, saved):
 
 
 def test_run_and_sweep_figures(tmp_path, saved):
-    history = pd.DataFrame({"generation": range(20), "best": np.linspace(0.1, 0.3, 20),
-                            "mean": np.linspace(0.05, 0.25, 20)})
+    history = pd.DataFrame(
+        {"generation": range(20), "best": np.linspace(0.1, 0.3, 20), "mean": np.linspace(0.05, 0.25, 20)}
+    )
     plot_module.plot_convergence(history, tmp_path / "c.png", "ga convergence (h4, mixed)", "η [1]", reference=0.31)
     assert "gap 3.23 %" in saved[-1].axes[0].get_legend().get_texts()[-1].get_text()
-    best = pd.DataFrame({"objective": ["mixed"] * 6, "mechanism": ["h4"] * 6, "optimizer": ["ga"] * 6,
-                         "w_d": [0.0, 0.5, 1.0] * 2, "seed": [0, 0, 0, 0, 0, 0], "gdi": np.linspace(0.1, 0.4, 6),
-                         "suri": np.linspace(0.5, 0.2, 6), "objective_value": np.linspace(0.3, 0.2, 6)})
+    best = pd.DataFrame(
+        {
+            "objective": ["mixed"] * 6,
+            "mechanism": ["h4"] * 6,
+            "optimizer": ["ga"] * 6,
+            "w_d": [0.0, 0.5, 1.0] * 2,
+            "seed": [0, 0, 0, 0, 0, 0],
+            "gdi": np.linspace(0.1, 0.4, 6),
+            "suri": np.linspace(0.5, 0.2, 6),
+            "objective_value": np.linspace(0.3, 0.2, 6),
+        }
+    )
     plot_module.plot_tradeoff(best, tmp_path / "t.png")
     assert "one seed per point" in saved[-1].axes[0].get_title()  # repeats of seed 0 are not seeds
-    plot_module.plot_front(pd.DataFrame({"volume": [1.0, 2.0], "gdi": [0.3, 0.2]}), ["volume", "gdi"],
-                           tmp_path / "f.png", "h4", units={"volume": "cm³·rad"})
+    plot_module.plot_front(
+        pd.DataFrame({"volume": [1.0, 2.0], "gdi": [0.3, 0.2]}),
+        ["volume", "gdi"],
+        tmp_path / "f.png",
+        "h4",
+        units={"volume": "cm³·rad"},
+    )
     assert saved[-1].axes[0].get_xlabel() == "V [cm³·rad]"
     for fig in saved:
         check_figure(fig)
@@ -90,7 +112,7 @@ def test_reproduction_figures_that_stand_alone(saved):
     workspace_pngs(6.0, 6.0, 42.0, 145723.0)
     slices_png(250.0, 400.0, 100.0, 657.5)
     section_png(resolution=40)
-    assert "145723 cm³·rad" in saved[0].axes[0].get_title()   # the design's V, not the slice's
+    assert "145723 cm³·rad" in saved[0].axes[0].get_title()  # the design's V, not the slice's
     assert "657.5 mm·rad²" in saved[2]._suptitle.get_text()
     for fig in saved:
         check_figure(fig)

@@ -13,8 +13,8 @@ from pipeline.config import MechanismConfig
 from pipeline.errors import ConfigError
 from pipeline.evaluation import DesignEvaluator
 from pipeline.objectives import OBJECTIVES, objective_values
-from pipeline.optimizers.de import DE, DEConfig
 from pipeline.optimizers.base import Problem
+from pipeline.optimizers.de import DE, DEConfig
 from pipeline.optimizers.ga import (
     GAConfig,
     arithmetic_crossover,
@@ -145,8 +145,7 @@ H4 = MechanismConfig(name="h4")
 
 def run_tiny(n_jobs: int):
     evaluator = DesignEvaluator(H4, 6, n_jobs)
-    problem = Problem(lambda x: objective_values("mixed", evaluator.evaluate(x), 0.5),
-                      H4.design.lower, H4.design.upper)
+    problem = Problem(lambda x: objective_values("mixed", evaluator.evaluate(x), 0.5), H4.design.lower, H4.design.upper)
     return genetic_algorithm(problem, problem.lower, problem.upper, population=8, generations=4, seed=11)
 
 
@@ -156,8 +155,12 @@ def test_ga_bit_identical_across_workers_and_dask():
     one = run_tiny(1)
     two = run_tiny(2)
     three = run_tiny(3)  # this process and two worker processes
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=None) as cluster, Client(cluster):
+    with (
+        LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None
+        ) as cluster,
+        Client(cluster),
+    ):
         with parallel_config(backend="dask"):
             dask = run_tiny(2)
     cols = [c for c in one.history.columns if c != "wall_time"]

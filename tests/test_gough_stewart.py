@@ -66,8 +66,7 @@ def test_rotation_is_tilt_and_torsion():
         return np.array([[math.cos(a), -math.sin(a), 0], [math.sin(a), math.cos(a), 0], [0, 0, 1]])
 
     ry = np.array([[math.cos(theta), 0, math.sin(theta)], [0, 1, 0], [-math.sin(theta), 0, math.cos(theta)]])
-    np.testing.assert_allclose(rotation([[0, 0, 0, w[0], w[1], sigma]])[0], rz(phi) @ ry @ rz(sigma - phi),
-                               atol=1e-14)
+    np.testing.assert_allclose(rotation([[0, 0, 0, w[0], w[1], sigma]])[0], rz(phi) @ ry @ rz(sigma - phi), atol=1e-14)
 
 
 def test_angular_velocity_map_matches_finite_differences():
@@ -189,9 +188,15 @@ def test_fichter_singularity_at_90_degrees_torsion():
     Merlet, Parallel Robots, 2006, Sec. 6.x). Checked on random geometries."""
     rng = np.random.default_rng(7)
     for _ in range(5):
-        m = GoughStewart(r_base=rng.uniform(200, 600), r_platform=rng.uniform(100, 400),
-                         sep_base=rng.uniform(5, 115), sep_platform=rng.uniform(5, 115),
-                         height=rng.uniform(300, 900), q_min=100.0, q_max=2000.0)
+        m = GoughStewart(
+            r_base=rng.uniform(200, 600),
+            r_platform=rng.uniform(100, 400),
+            sep_base=rng.uniform(5, 115),
+            sep_platform=rng.uniform(5, 115),
+            height=rng.uniform(300, 900),
+            q_min=100.0,
+            q_max=2000.0,
+        )
         for z in (300.0, 800.0):
             for torsion in (math.pi / 2, -math.pi / 2):
                 assert m.inverse_condition([[0, 0, z, 0, 0, torsion]])[0] < 1e-12
@@ -200,11 +205,17 @@ def test_fichter_singularity_at_90_degrees_torsion():
             assert before * after < 0
 
 
-@pytest.mark.parametrize("name, value, field", [
-    ("sep_base", 120.0, "'sep_base'"), ("sep_platform", 0.0, "'sep_platform'"),
-    ("r_base", -1.0, "'r_base'"), ("cone_platform", 180.0, "'cone_platform'"),
-    ("q_min", 950.0, "'q_min'"), ("cone_reference", "axis", "'cone_reference'"),
-])
+@pytest.mark.parametrize(
+    "name, value, field",
+    [
+        ("sep_base", 120.0, "'sep_base'"),
+        ("sep_platform", 0.0, "'sep_platform'"),
+        ("r_base", -1.0, "'r_base'"),
+        ("cone_platform", 180.0, "'cone_platform'"),
+        ("q_min", 950.0, "'q_min'"),
+        ("cone_reference", "axis", "'cone_reference'"),
+    ],
+)
 def test_bad_parameters_name_the_field(name, value, field):
     with pytest.raises(ValueError, match=field):
         GoughStewart(**{**DESIGN, name: value})
@@ -226,14 +237,17 @@ def test_pose_bounds_contain_every_reachable_pose(mech):
 
 
 def test_cone_limits_and_dexterity_shrink_the_workspace(mech):
-    wide = evaluate(GoughStewart(**DESIGN, cone_base=80.0, cone_platform=80.0), resolution=16,
-                    min_inverse_condition=0.0, error_estimate=False)
+    wide = evaluate(
+        GoughStewart(**DESIGN, cone_base=80.0, cone_platform=80.0),
+        resolution=16,
+        min_inverse_condition=0.0,
+        error_estimate=False,
+    )
     tight = evaluate(mech, resolution=16, min_inverse_condition=0.0, error_estimate=False)
     assert 0 < tight.volume < wide.volume
 
 
-def brute_force_volume(m: GoughStewart, tilt_x: float, tilt_y: float, torsion: float, n: int,
-                       seed: int) -> float:
+def brute_force_volume(m: GoughStewart, tilt_x: float, tilt_y: float, torsion: float, n: int, seed: int) -> float:
     """Independent of the package's IK, limits and integrator: plain Monte-Carlo over a large box,
     each leg's length and cone angles from an explicitly composed rotation (scipy's Rotation)."""
     from scipy.spatial.transform import Rotation
@@ -262,8 +276,7 @@ def brute_force_volume(m: GoughStewart, tilt_x: float, tilt_y: float, torsion: f
 @pytest.mark.parametrize("angles", [(0.0, 0.0, 0.0), (0.15, -0.1, 0.3)])
 def test_constant_orientation_volume_agrees_with_brute_force(mech, angles):
     """Grid evaluator vs the brute-force Monte-Carlo above (4e5 points: ~2 % standard error)."""
-    ev = constant_orientation_workspace(mech, *angles, resolution=40, min_inverse_condition=0.0,
-                                        error_estimate=False)
+    ev = constant_orientation_workspace(mech, *angles, resolution=40, min_inverse_condition=0.0, error_estimate=False)
     brute = brute_force_volume(mech, *angles, n=400_000, seed=1)
     assert ev.volume_unit == "mm³"
     assert ev.volume == pytest.approx(brute, rel=0.06)
@@ -284,7 +297,8 @@ def test_workspace_6d_interval_covers_a_fine_grid(mech):
     lo, hi = qmc.volume_ci
     assert lo < qmc.volume < hi and (hi - lo) < 0.1 * qmc.volume
     assert qmc.unit == "mm³·rad³" and qmc.box_volume == pytest.approx(
-        float(np.prod(np.subtract(qmc.box_upper, qmc.box_lower))))
+        float(np.prod(np.subtract(qmc.box_upper, qmc.box_lower)))
+    )
     grid = evaluate(mech, orientation=orientation, resolution=8, error_estimate=False)
     assert grid.volume_unit == "mm³·rad³"
     assert qmc.volume == pytest.approx(grid.volume, rel=0.1)

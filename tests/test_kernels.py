@@ -30,17 +30,18 @@ def both_paths(func):
 
 
 CASES = [(name, {}, {}) for name in sorted(PAPER_DESIGNS)] + [
-    ("h4", {"ball_joint_limit": 65.0}, {}),                 # joint limit inside the fused H4 kernel
+    ("h4", {"ball_joint_limit": 65.0}, {}),  # joint limit inside the fused H4 kernel
     ("h4", {"homogenising": "rod"}, {"resolution": 16}),
-    ("h4", {}, {"fixed": {"theta": 0.2}}),                  # a slice: fused path with one angle
+    ("h4", {}, {"fixed": {"theta": 0.2}}),  # a slice: fused path with one angle
     ("h4", {"base": "tracking"}, {"min_inverse_condition": 0.0}),
     ("tricept", {}, {"method": "polar", "resolution": 12}),
     ("rpr3", {}, {"orientation": (0.5, 0.5)}),
 ]
 
 
-@pytest.mark.parametrize("name, extra, options", CASES,
-                         ids=[f"{n}-{'-'.join(e) or 'default'}-{'-'.join(o) or 'grid'}" for n, e, o in CASES])
+@pytest.mark.parametrize(
+    "name, extra, options", CASES, ids=[f"{n}-{'-'.join(e) or 'default'}-{'-'.join(o) or 'grid'}" for n, e, o in CASES]
+)
 def test_evaluation_matches_the_numpy_reference(name, extra, options):
     mech = get_mechanism(name, **{**PAPER_DESIGNS[name], **extra})
     fast, reference = both_paths(lambda: evaluate(mech, **options))
@@ -115,13 +116,26 @@ def test_kernel_choice_from_the_environment(monkeypatch):
 
 
 def test_unknown_kernel_choice_is_one_line_before_any_work(tmp_path):
-    proc = subprocess.run([sys.executable, "-m", "pipeline", "+experiment=rpr2_mixed", "+debug=fast",
-                           f"paths.output_dir={tmp_path}", f"hydra.run.dir={tmp_path / 'run'}"],
-                          cwd=ROOT, capture_output=True, text=True, timeout=120,
-                          env={**os.environ, kernels.KERNELS_ENV: "fortran"})
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pipeline",
+            "+experiment=rpr2_mixed",
+            "+debug=fast",
+            f"paths.output_dir={tmp_path}",
+            f"hydra.run.dir={tmp_path / 'run'}",
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={**os.environ, kernels.KERNELS_ENV: "fortran"},
+    )
     assert proc.returncode == 2, proc.stderr
-    assert proc.stderr.strip() == ("error: environment variable PM_DESIGN_KERNELS must be one of "
-                                   "numba, numpy; got 'fortran'")
+    assert proc.stderr.strip() == (
+        "error: environment variable PM_DESIGN_KERNELS must be one of numba, numpy; got 'fortran'"
+    )
     assert not (tmp_path / "run").exists()
 
 
@@ -135,13 +149,21 @@ def test_h4_compiled_inverse_condition_matches_the_numpy_path():
     assert 1000 < np.isfinite(reference).sum() < len(poses)  # reachable and unreachable poses
     good = reference > 1e-3
     np.testing.assert_allclose(fast[good], reference[good], rtol=1e-10)
-    np.testing.assert_allclose(fast[~good & np.isfinite(reference)], reference[~good & np.isfinite(reference)],
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        fast[~good & np.isfinite(reference)], reference[~good & np.isfinite(reference)], atol=1e-12
+    )
 
 
-FUSED = [("rpr2", {}), ("rpr3", {}), ("delta", {}), ("delta", {"passive_limit": 20.0}), ("tricept", {}),
-         ("tricept", {"cone_reference": "home", "tilt_limit": 25.0}), ("tricept", {"cone_joints": "platform"}),
-         ("tricept", {"cone_joints": "none", "offset_side": -1})]
+FUSED = [
+    ("rpr2", {}),
+    ("rpr3", {}),
+    ("delta", {}),
+    ("delta", {"passive_limit": 20.0}),
+    ("tricept", {}),
+    ("tricept", {"cone_reference": "home", "tilt_limit": 25.0}),
+    ("tricept", {"cone_joints": "platform"}),
+    ("tricept", {"cone_joints": "none", "offset_side": -1}),
+]
 
 
 @pytest.mark.parametrize("name, extra", FUSED, ids=[f"{n}-{'-'.join(e) or 'default'}" for n, e in FUSED])
@@ -176,12 +198,17 @@ def test_blocked_batch_equals_one_matrix_at_a_time(n):
     jac[9] = 1e200  # finite entries whose squares overflow
     scale = np.linspace(1.0, 0.5, n)
     batch = kernels.inverse_condition_batch(jac, scale)
-    alone = np.array([kernels.inverse_condition_batch(jac[k:k + 1], scale)[0] for k in range(len(jac))])
+    alone = np.array([kernels.inverse_condition_batch(jac[k : k + 1], scale)[0] for k in range(len(jac))])
     np.testing.assert_array_equal(batch, alone)
 
 
-PERIODIC = [("h4", {}), ("h4", {"ball_joint_limit": 65.0}), ("tricept", {}),
-            ("tricept", {"cone_reference": "home", "tilt_limit": 25.0}), ("rpr3", {})]
+PERIODIC = [
+    ("h4", {}),
+    ("h4", {"ball_joint_limit": 65.0}),
+    ("tricept", {}),
+    ("tricept", {"cone_reference": "home", "tilt_limit": 25.0}),
+    ("rpr3", {}),
+]
 
 
 @pytest.mark.parametrize("name, extra", PERIODIC, ids=[f"{n}-{'-'.join(e) or 'default'}" for n, e in PERIODIC])
@@ -201,12 +228,14 @@ def test_grid_kernels_equal_one_pose_at_a_time(name, extra):
         def run(poses):
             return np.column_stack(mech.exact_axis_columns(poses, lo[2], hi[2]))
     else:
+
         def run(poses):
             return mech.reachable_inverse_condition(poses)
+
     on_grid = run(grid)
     assert np.isfinite(on_grid).any() and np.isnan(on_grid).any()
     np.testing.assert_array_equal(run(grid[order]), on_grid[order])
-    np.testing.assert_array_equal(np.concatenate([run(grid[k:k + 1]) for k in range(len(grid))]), on_grid)
+    np.testing.assert_array_equal(np.concatenate([run(grid[k : k + 1]) for k in range(len(grid))]), on_grid)
 
 
 def test_cone_test_without_arc_cosine_is_the_arc_cosine_test():
@@ -219,8 +248,9 @@ def test_cone_test_without_arc_cosine_is_the_arc_cosine_test():
     rng = np.random.default_rng(0)
     for cone in (1e-3, 0.3, math.radians(60.0), 1.5, math.pi / 2, 3.0, math.pi, math.inf):
         edge = math.cos(cone) if cone < math.pi else -1.0
-        near = edge + np.concatenate([np.arange(-40, 41) * np.spacing(max(abs(edge), 1e-300)),
-                                      [-1.1e-12, -0.9e-12, 0.9e-12, 1.1e-12]])
+        near = edge + np.concatenate(
+            [np.arange(-40, 41) * np.spacing(max(abs(edge), 1e-300)), [-1.1e-12, -0.9e-12, 0.9e-12, 1.1e-12]]
+        )
         for cosine in np.concatenate([near, rng.uniform(-1.0000001, 1.0000001, 2000)]):
             expected = math.acos(min(max(cosine, -1.0), 1.0)) <= cone
             assert _within_cone(float(cosine), cone, _cone_cosine(cone)) == expected, (cone, cosine)

@@ -52,8 +52,16 @@ def test_h4_forward_polynomial_roots_eq27(base):
     poly = m.forward_polynomial(m.inverse(EQ26_POSE)[0])
     assert poly.shape == (9,)
     roots = np.roots(poly)
-    paper = [-0.61309 + 0.56609j, -0.61309 - 0.56609j, 0.073172 + 0.84245j, 0.073172 - 0.84245j,
-             0.028294 + 0.88575j, 0.028294 - 0.88575j, 0.267957, -2.8822]
+    paper = [
+        -0.61309 + 0.56609j,
+        -0.61309 - 0.56609j,
+        0.073172 + 0.84245j,
+        0.073172 - 0.84245j,
+        0.028294 + 0.88575j,
+        0.028294 - 0.88575j,
+        0.267957,
+        -2.8822,
+    ]
     for p in paper:
         nearest = roots[np.argmin(np.abs(roots - p))]
         # 4 significant digits in the real and in the imaginary part
@@ -86,9 +94,16 @@ def test_tricept_leg1_closed_form_corrects_eq3():
     rng = np.random.default_rng(3)
     poses = rng.uniform([400, -0.5, -0.5], [700, 0.5, 0.5], size=(50, 3))
     c, psi, th = poses.T
-    q1_sq = (a**2 / 3 + b**2 / 3 + c**2 + d**2 - 2 / 3 * a * b * np.cos(th)
-             + 2 * c * d * np.cos(th) * np.cos(psi) - 2 * b * d / np.sqrt(3) * np.cos(psi) * np.sin(th)
-             - 2 * a * c / np.sqrt(3) * np.sin(th))
+    q1_sq = (
+        a**2 / 3
+        + b**2 / 3
+        + c**2
+        + d**2
+        - 2 / 3 * a * b * np.cos(th)
+        + 2 * c * d * np.cos(th) * np.cos(psi)
+        - 2 * b * d / np.sqrt(3) * np.cos(psi) * np.sin(th)
+        - 2 * a * c / np.sqrt(3) * np.sin(th)
+    )
     np.testing.assert_allclose(m.inverse(poses)[:, 0] ** 2, q1_sq, rtol=1e-12)
 
 
@@ -118,8 +133,7 @@ def test_tricept_cone_angles_at_home():
 
 
 # ---------------------------------------------------------------- 3-RPR
-THESIS_RPR3 = dict(base=[[0, 0], [200, 0], [0, 200]], platform=[[0, 0], [50, 0], [40, 40]],
-                   rho_min=80.0, rho_max=160.0)
+THESIS_RPR3 = dict(base=[[0, 0], [200, 0], [0, 200]], platform=[[0, 0], [50, 0], [40, 40]], rho_min=80.0, rho_max=160.0)
 
 
 def test_rpr3_thesis_example_two_modes():

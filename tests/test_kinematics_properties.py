@@ -127,8 +127,9 @@ def test_h4_inverse_condition_zero_on_ik_boundary():
 def test_length_changes_inverse_condition_only_for_angular_mechanisms():
     rpr2 = get_mechanism("rpr2", **PAPER_DESIGNS["rpr2"])
     poses = random_poses("rpr2", 20, seed=3)
-    np.testing.assert_array_equal(rpr2.inverse_condition(poses, length=1.0),
-                                  rpr2.inverse_condition(poses, length=100.0))
+    np.testing.assert_array_equal(
+        rpr2.inverse_condition(poses, length=1.0), rpr2.inverse_condition(poses, length=100.0)
+    )
     h4 = get_mechanism("h4", **PAPER_DESIGNS["h4"])
     poses = random_poses("h4", 20, seed=3)
     a, b = h4.inverse_condition(poses, length=1.0), h4.inverse_condition(poses, length=50.0)
@@ -146,12 +147,17 @@ def test_length_changes_inverse_condition_only_for_angular_mechanisms():
         ("tricept", dict(a=250.0, b=400.0, d=100.0, q_min=800.0, q_max=750.0), "'q_min'"),
         ("tricept", dict(a=250.0, b=-4.0, d=100.0), "'b'"),
         ("tricept", dict(a=250.0, b=400.0, d=100.0, cone=200.0), "'cone'"),
-        ("rpr3", dict(base=[[0, 0], [1, 0]], platform=[[0, 0], [1, 0], [0, 1]],
-                      rho_min=1.0, rho_max=2.0), "'base'"),
-        ("rpr3", dict(base=[[0, 0], [1, 0], [0, 1]], platform=[[1, 0], [1, 0], [0, 1]],
-                      rho_min=1.0, rho_max=2.0), "'platform'"),
-        ("rpr3", dict(base=[[0, 0], [1, 0], [0, 1]], platform=[[0, 0], [1, 0], [0, 1]],
-                      rho_min=3.0, rho_max=2.0), "'rho_min'"),
+        ("rpr3", dict(base=[[0, 0], [1, 0]], platform=[[0, 0], [1, 0], [0, 1]], rho_min=1.0, rho_max=2.0), "'base'"),
+        (
+            "rpr3",
+            dict(base=[[0, 0], [1, 0], [0, 1]], platform=[[1, 0], [1, 0], [0, 1]], rho_min=1.0, rho_max=2.0),
+            "'platform'",
+        ),
+        (
+            "rpr3",
+            dict(base=[[0, 0], [1, 0], [0, 1]], platform=[[0, 0], [1, 0], [0, 1]], rho_min=3.0, rho_max=2.0),
+            "'rho_min'",
+        ),
         ("rpr2", dict(b=5.0, q_min=6.0, q_max=float("inf")), "'q_max'"),
         ("rpr2", dict(b=5.0, q_min=6.0), "q_max"),
     ],

@@ -19,8 +19,13 @@ import pandas as pd
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-SWEEP = ["+experiment=rpr2_mixed", "+debug=fast", "optimizer.population=4", "optimizer.generations=2",
-         "objective.w_d=0,1"]
+SWEEP = [
+    "+experiment=rpr2_mixed",
+    "+debug=fast",
+    "optimizer.population=4",
+    "optimizer.generations=2",
+    "objective.w_d=0,1",
+]
 #: columns that describe the launch, not the result
 LAUNCH_COLUMNS = {"run_id", "launch_id", "wall_time", "overrides", "source"}
 TABLES = ("best", "history", "designs", "runs")
@@ -32,17 +37,25 @@ LAUNCHERS = {
 
 
 def sweep(out: Path, extra: list[str]) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "pipeline", "-m", *SWEEP, *extra, f"paths.output_dir={out}"],
-                          cwd=ROOT, capture_output=True, text=True, timeout=300,
-                          env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    return subprocess.run(
+        [sys.executable, "-m", "pipeline", "-m", *SWEEP, *extra, f"paths.output_dir={out}"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
 
 
 def read_tables(dataset: Path) -> dict[str, pd.DataFrame]:
     tables = {}
     for table in TABLES:
         frame = pd.read_parquet(dataset / table)
-        keys = ["config_hash"] + (["generation"] if "generation" in frame else []) + \
-            (["sample_index"] if "sample_index" in frame else [])
+        keys = (
+            ["config_hash"]
+            + (["generation"] if "generation" in frame else [])
+            + (["sample_index"] if "sample_index" in frame else [])
+        )
         frame = frame.drop(columns=[c for c in LAUNCH_COLUMNS if c in frame])
         tables[table] = frame.sort_values(keys).reset_index(drop=True)
     return tables
@@ -74,8 +87,16 @@ def test_sweep_through_launcher_gives_the_basic_launchers_dataset(launcher, basi
 # its class name (a private-API guess, issue 22). Now each run caps its own worker count at the cores
 # it may use (tests/test_pool.py); what stays is that every job of every batch is checked first.
 def test_a_bad_job_in_a_later_batch_is_refused_before_the_first_batch_runs(tmp_path):
-    proc = sweep(tmp_path, ["hydra/launcher=joblib", "hydra.launcher.n_jobs=2", "parallel.n_jobs=1",
-                            "hydra.sweeper.max_batch_size=1", "objective.w_d=0,1,2"])
+    proc = sweep(
+        tmp_path,
+        [
+            "hydra/launcher=joblib",
+            "hydra.launcher.n_jobs=2",
+            "parallel.n_jobs=1",
+            "hydra.sweeper.max_batch_size=1",
+            "objective.w_d=0,1,2",
+        ],
+    )
     assert proc.returncode == 2, proc.stderr
     err = proc.stderr.strip()
     assert "Traceback" not in err and "\n" not in err, err

@@ -30,11 +30,14 @@ def test_a_class_path_builds_and_evaluates_like_its_registry_name(tmp_path):
     assert (a == b).all() and a[:, 0].min() > 0
 
 
-@pytest.mark.parametrize("path, says", [
-    ("no_such_package.mod:Thing", "no_such_package"),
-    ("kinematics.rpr2:NoSuchClass", "NoSuchClass"),
-    ("kinematics.base:DesignVariable", "Mechanism"),
-])
+@pytest.mark.parametrize(
+    "path, says",
+    [
+        ("no_such_package.mod:Thing", "no_such_package"),
+        ("kinematics.rpr2:NoSuchClass", "NoSuchClass"),
+        ("kinematics.base:DesignVariable", "Mechanism"),
+    ],
+)
 def test_a_bad_class_path_is_one_line_naming_the_key(tmp_path, path, says):
     with pytest.raises(ConfigError) as info:
         _validated(["mechanism=path", f"mechanism.name={path}"], tmp_path)

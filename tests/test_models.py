@@ -36,8 +36,10 @@ def test_no_design_variable_is_inert(name):
 
 def test_h4_tracking_base_makes_d_inert_which_is_why_it_is_not_the_default():
     """The first version's reading: Q_i cancels from A_iB_i, so V and GDI ignore d."""
-    results = {d: evaluate(get_mechanism("h4", d=d, h=5.0, Qz=40.0, base="tracking"), error_estimate=False)
-               for d in (1.0, 5.0, 15.0)}
+    results = {
+        d: evaluate(get_mechanism("h4", d=d, h=5.0, Qz=40.0, base="tracking"), error_estimate=False)
+        for d in (1.0, 5.0, 15.0)
+    }
     assert len({round(r.volume, 6) for r in results.values()}) == 1
     assert len({round(r.gdi, 9) for r in results.values()}) == 1
     scaled = [evaluate(get_mechanism("h4", d=d, h=5.0, Qz=40.0), error_estimate=False).volume for d in (1.0, 15.0)]
@@ -55,8 +57,10 @@ def test_h4_ball_joint_limit_and_homogenising_readings_act():
     base = evaluate(get_mechanism("h4", d=6.0, h=6.0, Qz=42.0), error_estimate=False)
     limited = evaluate(get_mechanism("h4", d=6.0, h=6.0, Qz=42.0, ball_joint_limit=70.0), error_estimate=False)
     assert 0 < limited.volume < base.volume
-    gdis = {h: evaluate(get_mechanism("h4", d=6.0, h=6.0, Qz=42.0, homogenising=h), error_estimate=False).gdi
-            for h in ("h", "rod", "none")}
+    gdis = {
+        h: evaluate(get_mechanism("h4", d=6.0, h=6.0, Qz=42.0, homogenising=h), error_estimate=False).gdi
+        for h in ("h", "rod", "none")
+    }
     values = sorted(gdis.values())
     assert values[0] > 0 and all(b / a > 1.1 for a, b in zip(values, values[1:]))  # each reading acts
     prism = get_mechanism("h4", d=6.0, h=6.0, Qz=42.0, v_star="prism")
@@ -68,8 +72,7 @@ def test_h4_ball_joint_limit_and_homogenising_readings_act():
 def test_tricept_readings_act_and_keep_the_kinematics():
     designs = dict(a=200.0, b=300.062, d=20.0)
     default = evaluate(get_mechanism("tricept", **designs), error_estimate=False)
-    for reading in ({"cone_reference": "home"}, {"cone_joints": "none"}, {"offset_side": -1},
-                    {"tilt_limit": 30.0}):
+    for reading in ({"cone_reference": "home"}, {"cone_joints": "none"}, {"offset_side": -1}, {"tilt_limit": 30.0}):
         ev = evaluate(get_mechanism("tricept", **designs, **reading), error_estimate=False)
         assert abs(ev.volume / default.volume - 1) > 0.05, reading
     below = get_mechanism("tricept", a=250.0, b=400.0, d=100.0, offset_side=-1)

@@ -12,9 +12,11 @@ def brute_force_ranks(values: np.ndarray) -> np.ndarray:
     ranks = np.full(len(values), -1)
     rank = 0
     while remaining:
-        front = [i for i in remaining
-                 if not any(np.all(values[j] >= values[i]) and np.any(values[j] > values[i])
-                            for j in remaining if j != i)]
+        front = [
+            i
+            for i in remaining
+            if not any(np.all(values[j] >= values[i]) and np.any(values[j] > values[i]) for j in remaining if j != i)
+        ]
         ranks[front] = rank
         remaining = [i for i in remaining if i not in front]
         rank += 1

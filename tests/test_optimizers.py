@@ -66,7 +66,7 @@ def test_polish_never_worsens_and_respects_its_budget():
 
 def test_sensitivity_probe_finds_a_flat_variable_and_its_interval():
     def flat_in_y(x):  # does not depend on x[:, 1]; flat in x[:, 0] only above 0.5
-        return -(x[:, 2] - 3.0) ** 2 + np.minimum(x[:, 0], 0.5)
+        return -((x[:, 2] - 3.0) ** 2) + np.minimum(x[:, 0], 0.5)
 
     problem = Problem(flat_in_y, LOWER, UPPER)
     out = flat_intervals(problem, np.array([0.75, 0.2, 3.0]), 0.5, ["a", "b", "c"])
@@ -88,7 +88,8 @@ def test_nsga2_front_matches_pymoo_on_zdt1():
         return -zdt1.evaluate(x)
 
     ours = NSGA2(NSGA2Config(population=40, generations=120, seed=1)).run(
-        Problem(negated, np.zeros(6), np.ones(6), n_objectives=2))
+        Problem(negated, np.zeros(6), np.ones(6), n_objectives=2)
+    )
     theirs = minimize(zdt1, PymooNSGA2(pop_size=40), ("n_gen", 121), seed=1, verbose=False)
     ours_f = -ours.front[1]
 
@@ -107,8 +108,9 @@ def test_cmaes_reaches_a_dense_reference_on_a_real_objective():
     """H4 max volume on a coarse grid: CMA-ES + polish within 0.1 % of a dense grid + polish."""
     h4 = MechanismConfig(name="h4")
     evaluator = DesignEvaluator(h4, 12, 1)
-    problem = Problem(lambda x: objective_values("volume", evaluator.evaluate(x), 0.0),
-                      h4.design.lower, h4.design.upper)
+    problem = Problem(
+        lambda x: objective_values("volume", evaluator.evaluate(x), 0.0), h4.design.lower, h4.design.upper
+    )
     axes = [np.linspace(lo, hi, 6) for lo, hi in zip(h4.design.lower, h4.design.upper)]
     grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     values = problem(grid)

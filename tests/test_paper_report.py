@@ -38,11 +38,19 @@ def test_table3_experiment_declares_its_sweep():
 
 
 def test_compare_groups_by_objective_w_d_and_optimiser():
-    best = pd.DataFrame({
-        "mechanism": ["h4"] * 5 + ["tricept"], "objective": ["mixed"] * 4 + ["volume", "mixed"],
-        "w_d": [0.5, 0.5, 0.5, 0.25, 0.0, 0.5], "optimizer": ["ga", "ga", "cmaes", "ga", "ga", "ga"],
-        "volume": [100.0, 200.0, 300.0, 50.0, 70.0, 9.0], "gdi": [0.1, 0.3, 0.2, 0.4, 0.5, 0.9],
-        "param_d_cm": [1.0, 3.0, 2.0, 4.0, 5.0, 6.0], "param_h_cm": [1.0] * 6, "param_Qz_cm": [40.0] * 6})
+    best = pd.DataFrame(
+        {
+            "mechanism": ["h4"] * 5 + ["tricept"],
+            "objective": ["mixed"] * 4 + ["volume", "mixed"],
+            "w_d": [0.5, 0.5, 0.5, 0.25, 0.0, 0.5],
+            "optimizer": ["ga", "ga", "cmaes", "ga", "ga", "ga"],
+            "volume": [100.0, 200.0, 300.0, 50.0, 70.0, 9.0],
+            "gdi": [0.1, 0.3, 0.2, 0.4, 0.5, 0.9],
+            "param_d_cm": [1.0, 3.0, 2.0, 4.0, 5.0, 6.0],
+            "param_h_cm": [1.0] * 6,
+            "param_Qz_cm": [40.0] * 6,
+        }
+    )
     rows = compare(best, load_paper("seed000_h4"))
     by = {(r[0], r[1], r[3]): r for r in rows}
     ga_v = by[("Table 3 (w_d = 0.5)", "ga", "V")]
@@ -50,25 +58,52 @@ def test_compare_groups_by_objective_w_d_and_optimiser():
     assert ga_v[5] == f"{150.0:.4g} ± {np.std([100.0, 200.0]):.2g}"
     assert ga_v[6] == f"{100 * (150.0 - 11304.0) / 11304.0:+.1f} %"
     assert by[("Table 3 (w_d = 0.5)", "cmaes", "d")][5] == "2"  # one run: no spread
-    assert by[("Table 1 (max V)", "ga", "gdi")][5] == "0.5"      # the volume objective, whatever w_d
+    assert by[("Table 1 (max V)", "ga", "gdi")][5] == "0.5"  # the volume objective, whatever w_d
     assert by[("Table 3 (w_d = 0.25)", "ga", "Qz")][5] == "40"
-    assert ("Table 2 (max GDI)", "-", "-") in by                 # no gdi runs: said so
+    assert ("Table 2 (max GDI)", "-", "-") in by  # no gdi runs: said so
     assert not any(r[1] == "ga" and r[3] == "gdi" and r[5] == "0.9" for r in rows)  # the Tricept row is not H4's
 
 
 def test_table3_multirun_then_report(tmp_path):
     """The experiment's own sweep (3 w_d x 3 seeds, tiny sizes) and the report read back from the dataset."""
     out = tmp_path / "out"
-    proc = subprocess.run([sys.executable, "-m", "pipeline", "-m", "+experiment=h4_table3", "+debug=fast",
-                           "optimizer.generations=2", "optimizer.population=6", f"paths.output_dir={out}"],
-                          cwd=ROOT, capture_output=True, text=True, timeout=300)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pipeline",
+            "-m",
+            "+experiment=h4_table3",
+            "+debug=fast",
+            "optimizer.generations=2",
+            "optimizer.population=6",
+            f"paths.output_dir={out}",
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert proc.returncode == 0, proc.stderr
     best = pd.read_parquet(out / "dataset" / "best")
     assert sorted(zip(best["w_d"], best["seed"])) == [(w, s) for w in (0.25, 0.5, 0.75) for s in (0, 1, 2)]
     report_file = tmp_path / "table3.md"
-    proc = subprocess.run([sys.executable, "-m", "pipeline.reproduction.paper_report", str(out / "dataset"), "--paper",
-                           "seed000_h4", "--out", str(report_file)], cwd=ROOT, capture_output=True, text=True,
-                          timeout=120)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pipeline.reproduction.paper_report",
+            str(out / "dataset"),
+            "--paper",
+            "seed000_h4",
+            "--out",
+            str(report_file),
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert proc.returncode == 0, proc.stderr
     text = report_file.read_text()
     half = best[np.isclose(best["w_d"], 0.5)]
@@ -77,16 +112,24 @@ def test_table3_multirun_then_report(tmp_path):
     assert "| Table 1 (max V) | - | 0 | - | - | no runs in the dataset | - |" in text
 
 
-@pytest.mark.parametrize("args, field", [
-    (["{dataset}", "--paper", "seed999"], "--paper='seed999' is invalid: allowed seed000_h4"),
-    (["{missing}", "--paper", "seed000_h4"], "dataset="),
-])
+@pytest.mark.parametrize(
+    "args, field",
+    [
+        (["{dataset}", "--paper", "seed999"], "--paper='seed999' is invalid: allowed seed000_h4"),
+        (["{missing}", "--paper", "seed000_h4"], "dataset="),
+    ],
+)
 def test_report_refusals_are_one_line(args, field, tmp_path):
     dataset = tmp_path / "dataset"
     (dataset / "best").mkdir(parents=True)
     values = {"dataset": dataset, "missing": tmp_path / "nope"}
-    proc = subprocess.run([sys.executable, "-m", "pipeline.reproduction.paper_report", *[a.format(**values) for a in args]],
-                          cwd=ROOT, capture_output=True, text=True, timeout=120)
+    proc = subprocess.run(
+        [sys.executable, "-m", "pipeline.reproduction.paper_report", *[a.format(**values) for a in args]],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and field in lines[0], proc.stderr

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import logging
 import subprocess
 import sys
 from pathlib import Path
@@ -14,16 +13,14 @@ import pytest
 from hydra import compose, initialize_config_dir
 from omegaconf import OmegaConf
 
-from pipeline.stages.aggregate import aggregate
-from pipeline.stages.aggregate import main as aggregate_main
-from pipeline.store.cache import cached
 from pipeline.config import CONFIG_DIR, Config, register_configs, validate
 from pipeline.errors import ConfigError
 from pipeline.stages.evaluate import evaluate_designs
-from pipeline.store.parquet import read_metadata
 from pipeline.stages.optimise import optimise_design
-from pipeline.study import run_study
 from pipeline.stages.sample import sample_designs
+from pipeline.store.cache import cached
+from pipeline.store.parquet import read_metadata
+from pipeline.study import run_study
 
 ROOT = Path(__file__).resolve().parents[1]
 CONF = CONFIG_DIR
@@ -88,10 +85,29 @@ def test_results_schema_and_refined_evaluation(tmp_path):
     cfg = make_cfg(["+experiment=h4_mixed", *tiny(tmp_path)])
     paths = run_study(cfg, tmp_path / "run")
     best = pd.read_parquet(paths["best"]).iloc[0]
-    for column in ("d_ratio", "h_ratio", "Qz_ratio", "param_d_cm", "param_h_cm", "param_Qz_cm", "param_base", "volume",
-                   "gdi", "suri", "objective_value", "volume_refined", "gdi_refined", "objective_value_refined",
-                   "optimizer_value", "found_by", "reference_gap", "flat_variables", "d_ratio_flat_lower",
-                   "volume_unit", "at_bounds"):
+    for column in (
+        "d_ratio",
+        "h_ratio",
+        "Qz_ratio",
+        "param_d_cm",
+        "param_h_cm",
+        "param_Qz_cm",
+        "param_base",
+        "volume",
+        "gdi",
+        "suri",
+        "objective_value",
+        "volume_refined",
+        "gdi_refined",
+        "objective_value_refined",
+        "optimizer_value",
+        "found_by",
+        "reference_gap",
+        "flat_variables",
+        "d_ratio_flat_lower",
+        "volume_unit",
+        "at_bounds",
+    ):
         assert column in best.index
     for redundant in ("wd", "fitness", "eta", "inverse_condition_mean", "volume_error", "gdi_error"):
         assert redundant not in best.index
@@ -128,10 +144,11 @@ def test_cache_hits_checked_with_joblibs_api(tmp_path):
     # a new w_d reruns only the optimiser; n_jobs is not part of any key
     other = validate(make_cfg([*overrides, "objective.w_d=0.75", "parallel.n_jobs=2"]))
     assert not cached(optimise_design, cache).check_call_in_cache(
-        other.mechanism, other.evaluate.resolution, other.evaluate.refine_factor, other.objective,
-        other.optimizer, None)
-    assert cached(evaluate_designs, cache).check_call_in_cache(other.mechanism, other.evaluate.resolution,
-                                                               designs, n_jobs=2)
+        other.mechanism, other.evaluate.resolution, other.evaluate.refine_factor, other.objective, other.optimizer, None
+    )
+    assert cached(evaluate_designs, cache).check_call_in_cache(
+        other.mechanism, other.evaluate.resolution, designs, n_jobs=2
+    )
     run_study(make_cfg(overrides), tmp_path / "b")
     for table in ("best", "history", "designs"):
         assert (tmp_path / "a" / f"{table}.parquet").read_bytes() == (tmp_path / "b" / f"{table}.parquet").read_bytes()
@@ -148,8 +165,7 @@ def test_cache_key_covers_every_source_file():
 
 def test_same_config_bit_identical_whatever_the_workers(tmp_path):
     one = run_study(make_cfg(["+experiment=h4_mixed", *tiny(tmp_path / "w1")]), tmp_path / "one")
-    two = run_study(make_cfg(["+experiment=h4_mixed", *tiny(tmp_path / "w2", "parallel.n_jobs=2")]),
-                    tmp_path / "two")
+    two = run_study(make_cfg(["+experiment=h4_mixed", *tiny(tmp_path / "w2", "parallel.n_jobs=2")]), tmp_path / "two")
     for table in ("best", "history", "designs"):
         assert one[table].read_bytes() == two[table].read_bytes()
 
@@ -158,26 +174,38 @@ def test_dask_backend_on_a_local_cluster(tmp_path):
     from dask.distributed import LocalCluster
 
     loky = run_study(make_cfg(["+experiment=rpr2_mixed", *tiny(tmp_path / "loky")]), tmp_path / "loky_run")
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                      dashboard_address=None) as cluster:
-        cfg = make_cfg(["+experiment=rpr2_mixed", *tiny(tmp_path / "dask", "parallel.backend=dask",
-                                                        "parallel.n_jobs=2",
-                                                        f"parallel.scheduler_address={cluster.scheduler_address}")])
+    with LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None
+    ) as cluster:
+        cfg = make_cfg(
+            [
+                "+experiment=rpr2_mixed",
+                *tiny(
+                    tmp_path / "dask",
+                    "parallel.backend=dask",
+                    "parallel.n_jobs=2",
+                    f"parallel.scheduler_address={cluster.scheduler_address}",
+                ),
+            ]
+        )
         dask = run_study(cfg, tmp_path / "dask_run")
     assert loky["best"].read_bytes() == dask["best"].read_bytes()
 
 
 # ------------------------------------------------------------- validation
-@pytest.mark.parametrize("override, field", [
-    ("objective.w_d=1.5", "objective.w_d"),
-    ("mechanism.design.lower=[0.2,0.01,0.35]", "mechanism.design bounds of d_ratio"),
-    ("mechanism.name=stewart", "mechanism.name"),
-    ("evaluate.resolution=0", "evaluate.resolution"),
-    ("parallel.n_jobs=0", "parallel.n_jobs"),
-    ("objective.name=speed", "objective.name"),
-    ("optimizer.name=pso", "optimizer.name"),
-    ("parallel.backend=mpi", "parallel.backend"),
-])
+@pytest.mark.parametrize(
+    "override, field",
+    [
+        ("objective.w_d=1.5", "objective.w_d"),
+        ("mechanism.design.lower=[0.2,0.01,0.35]", "mechanism.design bounds of d_ratio"),
+        ("mechanism.name=stewart", "mechanism.name"),
+        ("evaluate.resolution=0", "evaluate.resolution"),
+        ("parallel.n_jobs=0", "parallel.n_jobs"),
+        ("objective.name=speed", "objective.name"),
+        ("optimizer.name=pso", "optimizer.name"),
+        ("parallel.backend=mpi", "parallel.backend"),
+    ],
+)
 def test_out_of_range_values_fail_with_one_line(override, field, tmp_path):
     cfg = make_cfg(["+experiment=h4_mixed", *tiny(tmp_path), override])
     with pytest.raises(ConfigError) as err:
@@ -217,8 +245,9 @@ def test_mechanism_options_come_from_the_classes():
 
 
 def run_cli(args: list[str], cwd: Path) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "pipeline", *args], cwd=cwd, capture_output=True,
-                          text=True, timeout=600)
+    return subprocess.run(
+        [sys.executable, "-m", "pipeline", *args], cwd=cwd, capture_output=True, text=True, timeout=600
+    )
 
 
 def test_cli_multirun_aggregates_a_w_d_sweep(tmp_path):
@@ -239,11 +268,12 @@ def test_cli_multirun_aggregates_a_w_d_sweep(tmp_path):
 
 def test_cli_multirun_over_mechanisms(tmp_path):
     out = tmp_path / "outputs"
-    proc = run_cli(["-m", "objective.name=mixed", "objective.w_d=0,1", "mechanism=h4,rpr2",
-                    *tiny(out)], ROOT)
+    proc = run_cli(["-m", "objective.name=mixed", "objective.w_d=0,1", "mechanism=h4,rpr2", *tiny(out)], ROOT)
     assert proc.returncode == 0, proc.stderr[-3000:]
     best = pd.read_parquet(out / "dataset" / "best")
     assert sorted(zip(best["mechanism"].astype(str), best["w_d"])) == [
-        ("h4", 0.0), ("h4", 1.0), ("rpr2", 0.0), ("rpr2", 1.0)]
-
-
+        ("h4", 0.0),
+        ("h4", 1.0),
+        ("rpr2", 0.0),
+        ("rpr2", 1.0),
+    ]

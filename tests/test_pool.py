@@ -19,7 +19,8 @@ import pytest
 from joblib.externals.loky.process_executor import BrokenProcessPool
 
 from pipeline.config import MechanismConfig
-from pipeline.evaluation import DesignEvaluator, pool as pool_module
+from pipeline.evaluation import DesignEvaluator
+from pipeline.evaluation import pool as pool_module
 from pipeline.evaluation.pool import FitnessPool, fitness_pool, worker_count
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -178,7 +179,8 @@ def test_worker_count_is_capped_by_the_cores_the_process_may_use(tmp_path):
         "designs = np.array([[5.0, 6.0], [4.0, 7.0], [4.5, 6.5]])\n"
         "DesignEvaluator(MechanismConfig(name='rpr2'), 24, 4).evaluate(designs)\n"
         "kids = open(f'/proc/{os.getpid()}/task/{os.getpid()}/children').read().split()\n"
-        "print(sum('LokyProcess' in open(f'/proc/{p}/cmdline').read() for p in kids))\n")
+        "print(sum('LokyProcess' in open(f'/proc/{p}/cmdline').read() for p in kids))\n"
+    )
     proc = subprocess.run([sys.executable, str(script)], cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split() == ["0"]
@@ -192,9 +194,16 @@ def test_a_process_with_an_open_pool_exits_and_leaves_no_worker(tmp_path):
         "from pipeline.evaluation import DesignEvaluator\n"
         "from pipeline.config import MechanismConfig\n"
         "designs = np.array([[5.0, 6.0], [4.0, 7.0]])\n"
-        "print(DesignEvaluator(MechanismConfig(name='rpr2'), 24, 2).evaluate(designs).shape, flush=True)\n")
-    proc = subprocess.Popen([sys.executable, str(script)], cwd=ROOT, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+        "print(DesignEvaluator(MechanismConfig(name='rpr2'), 24, 2).evaluate(designs).shape, flush=True)\n"
+    )
+    proc = subprocess.Popen(
+        [sys.executable, str(script)],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
     out, err = proc.communicate(timeout=120)
     assert proc.returncode == 0, err
     assert out.strip().startswith("(2, ")

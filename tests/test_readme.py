@@ -71,8 +71,9 @@ def optimizer_of(overrides: list[str]) -> str:
     from pipeline.config import CONFIG_DIR, register_configs
 
     register_configs()
-    plain = [o for o in overrides if not o.startswith("-") and "," not in o.split("=", 1)[-1]
-             and not o.startswith("hydra")]
+    plain = [
+        o for o in overrides if not o.startswith("-") and "," not in o.split("=", 1)[-1] and not o.startswith("hydra")
+    ]
     with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3"):
         return str(compose(config_name="config", overrides=plain).optimizer.name)
 
@@ -86,7 +87,7 @@ def runnable(command: str) -> str:
         if is_study(part) and part.split()[-1] not in ("--help", "-h"):
             words = shlex.split(part)
             start = 3 if words[0] == "python" else 1
-            if words[start:start + 1] not in (["evaluate"], ["aggregate"], ["report"]):
+            if words[start : start + 1] not in (["evaluate"], ["aggregate"], ["report"]):
                 part += " +debug=fast " + " ".join(TINY_OPTIMIZER[optimizer_of(words[start:])])
         parts.append(part)
     return " && ".join(parts)
@@ -128,7 +129,7 @@ def test_readme_command_runs_from_a_fresh_folder(command, tmp_path):
     proc = run(runnable(command), folder)
     assert proc.returncode == 0, f"{runnable(command)}\n{proc.stderr[-3000:]}"
     if is_study(command.split("&&")[-1].strip()):
-        assert "dataset: outputs/dataset" in proc.stdout, proc.stdout[-2000:]   # says where results went
+        assert "dataset: outputs/dataset" in proc.stdout, proc.stdout[-2000:]  # says where results went
         assert (folder / "outputs" / "dataset" / "best").is_dir()
     check_reports_survive_a_move(folder, tmp_path / "moved")
 

@@ -17,15 +17,17 @@ from pipeline.stages.optimise import optimise_design, reference_columns
 
 LOWER, UPPER = np.array([0.0, 10.0]), np.array([1.0, 30.0])
 GLOBAL = np.array([0.85, 26.0])  # narrow peak, height 1
-LOCAL = np.array([0.3, 15.0])    # broad peak, height 0.97: where a single run from the centre tends to go
+LOCAL = np.array([0.3, 15.0])  # broad peak, height 0.97: where a single run from the centre tends to go
 
 
 def two_basins(x: np.ndarray) -> np.ndarray:
     u = (x - LOWER) / (UPPER - LOWER)
     g = (GLOBAL - LOWER) / (UPPER - LOWER)
     local = (LOCAL - LOWER) / (UPPER - LOWER)
-    return np.maximum(np.exp(-np.sum((u - g) ** 2, axis=1) / (2 * 0.1 ** 2)),
-                      0.97 * np.exp(-np.sum((u - local) ** 2, axis=1) / (2 * 0.3 ** 2)))
+    return np.maximum(
+        np.exp(-np.sum((u - g) ** 2, axis=1) / (2 * 0.1**2)),
+        0.97 * np.exp(-np.sum((u - local) ** 2, axis=1) / (2 * 0.3**2)),
+    )
 
 
 def test_plain_cma_from_the_centre_can_miss_the_global_basin():
@@ -71,7 +73,10 @@ def test_distinct_basins_keep_a_narrow_peak_beside_a_broad_one():
         better = values > values[k]
         assert np.all(np.linalg.norm(unit[better] - unit[k], axis=1) >= 0.2)
     heads = LOWER + unit[chosen] * (UPPER - LOWER)
-    near = lambda peak: np.min(np.linalg.norm((heads - peak) / (UPPER - LOWER), axis=1))
+
+    def near(peak):
+        return np.min(np.linalg.norm((heads - peak) / (UPPER - LOWER), axis=1))
+
     assert near(GLOBAL) < 0.25 and near(LOCAL) < 0.25  # both peaks head a basin
     assert len(distinct_basins(unit, values, 10, 2.0)) == 1  # everything in one basin
 
@@ -104,8 +109,14 @@ def test_gap_within_error_is_not_quoted_as_a_percentage():
 
 def test_best_row_error_bars_and_evaluations_apart_from_the_reference():
     mech = MechanismConfig(name="rpr3")
-    reference = {"value": 0.3, "x": [100.0, 90.0], "found_by": "given", "n_evaluations": 12345,
-                 "error": 0.001, "value_refined": 0.301}
+    reference = {
+        "value": 0.3,
+        "x": [100.0, 90.0],
+        "found_by": "given",
+        "n_evaluations": 12345,
+        "error": 0.001,
+        "value_refined": 0.301,
+    }
     ga = GAConfig(population=4, generations=2, reference=True)
     out = optimise_design(mech, 6, 2, ObjectiveConfig("mixed", 0.5), ga, reference=reference)
     best = out["best"]
@@ -113,6 +124,7 @@ def test_best_row_error_bars_and_evaluations_apart_from_the_reference():
     assert best["reference_evaluations"] == 12345
     assert best["n_evaluations"] == out["history"]["n_evaluations"].sum() < 12345
     assert best["reference_gap_label"] and best["reference_found_by"] == "given"
-    off = optimise_design(mech, 6, 2, ObjectiveConfig("mixed", 0.5), GAConfig(population=4, generations=2,
-                                                                              reference=False))
+    off = optimise_design(
+        mech, 6, 2, ObjectiveConfig("mixed", 0.5), GAConfig(population=4, generations=2, reference=False)
+    )
     assert off["best"]["reference_evaluations"] == 0 and off["best"]["reference_gap_label"] == ""

@@ -8,7 +8,6 @@ the CLI to be interrupted or a cluster are in the slow tier.
 
 from __future__ import annotations
 
-import errno
 import json
 import os
 import shutil
@@ -22,15 +21,14 @@ from pathlib import Path
 
 import joblib
 import numpy as np
-from joblib import parallel_config
 import pandas as pd
 import pytest
 from hydra import compose, initialize_config_dir
+from joblib import parallel_config
 from omegaconf import OmegaConf
 
 from kinematics import MECHANISMS
-from pipeline.config import CONFIG_DIR, ConfigError, register_configs
-from pipeline.config import guard
+from pipeline.config import CONFIG_DIR, ConfigError, guard, register_configs
 from pipeline.errors import RunError, interrupt_in
 from pipeline.stages.aggregate import aggregate
 from pipeline.store.checksums import REGISTRY
@@ -41,8 +39,15 @@ ENV = {**os.environ, "PYTHONUNBUFFERED": "1"}
 
 
 def cli(args: list[str], timeout: float = 300, **kwargs) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "pipeline", *args], cwd=ROOT, capture_output=True, text=True,
-                          timeout=timeout, env=ENV, **kwargs)
+    return subprocess.run(
+        [sys.executable, "-m", "pipeline", *args],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=ENV,
+        **kwargs,
+    )
 
 
 def one_error_line(proc: subprocess.CompletedProcess, *fragments: str) -> str:
@@ -99,23 +104,32 @@ def precheck(argv: list[str], capsys) -> tuple[int, str]:
     return code, capsys.readouterr().err.strip()
 
 
-@pytest.mark.parametrize("argv, fragment", [
-    (["mechanism.fixed.stroke=1e300"], "mechanism.fixed.stroke=1e+300 is invalid: allowed a number in [1, 1000] cm"),
-    (["mechanism.fixed.stroke=1e-300"], "mechanism.fixed.stroke=1e-300 is invalid: allowed a number in [1, 1000]"),
-    (["mechanism.fixed.stroke=abc"], "mechanism.fixed.stroke='abc' is invalid: allowed a number in [1, 1000]"),
-    (["mechanism.fixed.stroke=nan"], "mechanism.fixed.stroke=nan is invalid"),
-    (["mechanism.fixed.stroke=-100"], "mechanism.fixed.stroke=-100 is invalid"),
-    (["mechanism=tricept", "mechanism.fixed.tilt_limit=0"], "mechanism.fixed.tilt_limit=0 is invalid: allowed null or"),
-    (["mechanism=delta", "mechanism.fixed.z_max=1"], "mechanism.fixed.z_max=1 is invalid"),
-    (["-m", "objective.w_d=abc"], "objective.w_d"),
-    (["+hydra.callbacks.x._target_=shutil.copyfile"], "hydra.callbacks.x._target_ is refused"),
-    (["-m", "+hydra.callbacks.x._target_=builtins.open"], "hydra.callbacks.x._target_ is refused"),
-    (["+hydra.job.env_set.PYTHONPATH=/tmp"], "hydra.job.env_set.PYTHONPATH is refused"),
-    (["-m", "+hydra.job.env_set.PYTHONPATH=/tmp"], "hydra.job.env_set.PYTHONPATH is refused"),
-    (["hydra.launcher._target_=os.system"], "is refused"),
-    (["--config-dir=/tmp"], "--config-dir is refused"),
-    (["--experimental-rerun", "x.pickle"], "--experimental-rerun is refused"),
-])
+@pytest.mark.parametrize(
+    "argv, fragment",
+    [
+        (
+            ["mechanism.fixed.stroke=1e300"],
+            "mechanism.fixed.stroke=1e+300 is invalid: allowed a number in [1, 1000] cm",
+        ),
+        (["mechanism.fixed.stroke=1e-300"], "mechanism.fixed.stroke=1e-300 is invalid: allowed a number in [1, 1000]"),
+        (["mechanism.fixed.stroke=abc"], "mechanism.fixed.stroke='abc' is invalid: allowed a number in [1, 1000]"),
+        (["mechanism.fixed.stroke=nan"], "mechanism.fixed.stroke=nan is invalid"),
+        (["mechanism.fixed.stroke=-100"], "mechanism.fixed.stroke=-100 is invalid"),
+        (
+            ["mechanism=tricept", "mechanism.fixed.tilt_limit=0"],
+            "mechanism.fixed.tilt_limit=0 is invalid: allowed null or",
+        ),
+        (["mechanism=delta", "mechanism.fixed.z_max=1"], "mechanism.fixed.z_max=1 is invalid"),
+        (["-m", "objective.w_d=abc"], "objective.w_d"),
+        (["+hydra.callbacks.x._target_=shutil.copyfile"], "hydra.callbacks.x._target_ is refused"),
+        (["-m", "+hydra.callbacks.x._target_=builtins.open"], "hydra.callbacks.x._target_ is refused"),
+        (["+hydra.job.env_set.PYTHONPATH=/tmp"], "hydra.job.env_set.PYTHONPATH is refused"),
+        (["-m", "+hydra.job.env_set.PYTHONPATH=/tmp"], "hydra.job.env_set.PYTHONPATH is refused"),
+        (["hydra.launcher._target_=os.system"], "is refused"),
+        (["--config-dir=/tmp"], "--config-dir is refused"),
+        (["--experimental-rerun", "x.pickle"], "--experimental-rerun is refused"),
+    ],
+)
 def test_items01_02_03_16_17_precheck_in_process(argv, fragment, tmp_path, capsys):
     code, err = precheck([*argv, f"paths.output_dir={tmp_path / 'out'}"], capsys)
     assert code == 2 and err.startswith("error: ") and "\n" not in err and fragment in err, err
@@ -123,8 +137,16 @@ def test_items01_02_03_16_17_precheck_in_process(argv, fragment, tmp_path, capsy
 
 
 def test_a_good_sweep_passes_the_precheck(tmp_path, capsys):
-    code, err = precheck(["-m", "+experiment=rpr2_mixed", "objective.w_d=0,0.5,1", "mechanism.fixed.q_max=9,9.6",
-                          f"paths.output_dir={tmp_path / 'out'}"], capsys)
+    code, err = precheck(
+        [
+            "-m",
+            "+experiment=rpr2_mixed",
+            "objective.w_d=0,0.5,1",
+            "mechanism.fixed.q_max=9,9.6",
+            f"paths.output_dir={tmp_path / 'out'}",
+        ],
+        capsys,
+    )
     assert code == 0 and err == ""
 
 
@@ -184,12 +206,15 @@ def test_item01_an_optimum_without_workspace_is_never_complete(monkeypatch, tmp_
 
 # ------------------------------------------------------------------ 3: -m precheck
 @pytest.mark.slow
-@pytest.mark.parametrize("overrides, fragment", [
-    (["objective.w_d=abc"], "objective.w_d"),
-    (["objective.w_d=0,abc"], "objective.w_d"),
-    (["+nosuchkey=1"], "nosuchkey"),
-    (["mechanism.fixed.stroke=0.5,1e300"], "mechanism.fixed.stroke"),
-])
+@pytest.mark.parametrize(
+    "overrides, fragment",
+    [
+        (["objective.w_d=abc"], "objective.w_d"),
+        (["objective.w_d=0,abc"], "objective.w_d"),
+        (["+nosuchkey=1"], "nosuchkey"),
+        (["mechanism.fixed.stroke=0.5,1e300"], "mechanism.fixed.stroke"),
+    ],
+)
 def test_item03_a_bad_override_under_multirun_is_one_line_exit_2(overrides, fragment, tmp_path):
     out = tmp_path / "out"
     proc = cli(["-m", *overrides, f"paths.output_dir={out}"], timeout=120)
@@ -217,9 +242,22 @@ runpy.run_module("pipeline", run_name="__main__")
 def test_item04_disk_full_while_hydra_saves_its_config_is_one_line_exit_1(tmp_path):
     out = tmp_path / "out"
     script = FULL_DISK.format(where=".hydra", extra="")
-    proc = subprocess.run([sys.executable, "-c", script, "+experiment=rpr2_mixed", *TINY,
-                           f"paths.output_dir={out}", f"hydra.run.dir={out}/run"],
-                          cwd=ROOT, capture_output=True, text=True, timeout=300, env=ENV)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            script,
+            "+experiment=rpr2_mixed",
+            *TINY,
+            f"paths.output_dir={out}",
+            f"hydra.run.dir={out}/run",
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=ENV,
+    )
     assert proc.returncode == 1
     one_error_line(proc, "No space left on device", ".hydra")
     assert not list(out.rglob("manifest.json")) and not list(out.rglob("*.parquet"))
@@ -244,9 +282,22 @@ def test_item04_disk_full_during_the_run_ends_failed_with_one_line_naming_the_pl
     """)
     script = FULL_DISK.format(where="pm-design.log", extra=extra)
     run_dir = out / "run"
-    proc = subprocess.run([sys.executable, "-c", script, "+experiment=rpr2_mixed", *TINY,
-                           f"paths.output_dir={out}", f"hydra.run.dir={run_dir}"],
-                          cwd=ROOT, capture_output=True, text=True, timeout=300, env=ENV)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            script,
+            "+experiment=rpr2_mixed",
+            *TINY,
+            f"paths.output_dir={out}",
+            f"hydra.run.dir={run_dir}",
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=ENV,
+    )
     assert proc.returncode == 1, proc.stderr[-3000:]
     assert "Logging error" not in proc.stderr and "Traceback" not in proc.stderr, proc.stderr[-3000:]
     errors = [ln for ln in proc.stderr.splitlines() if ln.startswith("error:")]
@@ -268,7 +319,7 @@ def test_item06_an_interrupt_inside_compiled_code_is_an_interrupt():
         try:
             raise KeyboardInterrupt
         except KeyboardInterrupt:
-            raise SystemError("<numba function> returned a result with an exception set")
+            raise SystemError("<numba function> returned a result with an exception set")  # noqa: B904 - as numba raises it
     except SystemError as exc:
         assert isinstance(interrupt_in(exc), KeyboardInterrupt)
     assert interrupt_in(ValueError("x")) is None
@@ -281,7 +332,7 @@ def test_item06_ctrl_c_during_evaluate_marks_the_run_interrupted(monkeypatch, tm
         try:
             raise KeyboardInterrupt
         except KeyboardInterrupt:
-            raise SystemError("CPUDispatcher returned a result with an exception set")
+            raise SystemError("CPUDispatcher returned a result with an exception set")  # noqa: B904 - as numba raises it
 
     monkeypatch.setattr(study, "evaluate_designs", ctrl_c_in_numba)
     run_dir = tmp_path / "run"
@@ -293,9 +344,23 @@ def test_item06_ctrl_c_during_evaluate_marks_the_run_interrupted(monkeypatch, tm
 
 
 def _start_and_signal(out: Path, sig: int, when: str, extra: list[str]) -> tuple[subprocess.Popen, str, Path]:
-    proc = subprocess.Popen([sys.executable, "-m", "pipeline", "+experiment=h4_mixed", f"paths.output_dir={out}",
-                             "plot.enabled=false", *extra], cwd=ROOT, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True, env=ENV)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "pipeline",
+            "+experiment=h4_mixed",
+            f"paths.output_dir={out}",
+            "plot.enabled=false",
+            *extra,
+        ],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+        env=ENV,
+    )
     deadline, manifest = time.time() + 180, None
     while time.time() < deadline and manifest is None:
         found = list(out.rglob("manifest.json"))
@@ -312,8 +377,9 @@ def _start_and_signal(out: Path, sig: int, when: str, extra: list[str]) -> tuple
 
 @pytest.mark.slow
 def test_item06_ctrl_c_during_evaluate_through_the_cli(tmp_path):
-    proc, stderr, manifest = _start_and_signal(tmp_path / "out", signal.SIGINT, "evaluate",
-                                               ["sample.n=64", "evaluate.resolution=40"])
+    proc, stderr, manifest = _start_and_signal(
+        tmp_path / "out", signal.SIGINT, "evaluate", ["sample.n=64", "evaluate.resolution=40"]
+    )
     assert proc.returncode == 130, stderr
     assert "Traceback" not in stderr and "SystemError" not in stderr
     assert json.loads(manifest.read_text())["status"] == "interrupted"
@@ -321,8 +387,9 @@ def test_item06_ctrl_c_during_evaluate_through_the_cli(tmp_path):
 
 @pytest.mark.slow
 def test_item07_sigterm_is_handled_like_ctrl_c_with_exit_143(tmp_path):
-    proc, stderr, manifest = _start_and_signal(tmp_path / "out", signal.SIGTERM, "start",
-                                               ["sample.n=16", "optimizer.generations=200"])
+    proc, stderr, manifest = _start_and_signal(
+        tmp_path / "out", signal.SIGTERM, "start", ["sample.n=16", "optimizer.generations=200"]
+    )
     assert proc.returncode == 143, stderr
     errors = [ln for ln in stderr.splitlines() if ln.startswith("error:")]
     assert len(errors) == 1 and "SIGTERM" in errors[0] and "Traceback" not in stderr
@@ -383,8 +450,13 @@ def test_item10_a_manifest_without_run_id_is_skipped_and_the_others_added(one_ru
     (bad / "manifest.json").write_text(json.dumps(manifest))
     report = aggregate(sweep, tmp_path / "dataset")
     assert len(report.added) == 1 and "manifest lacks run_id" in report.skipped[0]
-    proc = subprocess.run([sys.executable, "-m", "pipeline.stages.aggregate", str(sweep), "--dataset",
-                           str(tmp_path / "dataset2")], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    proc = subprocess.run(
+        [sys.executable, "-m", "pipeline.stages.aggregate", str(sweep), "--dataset", str(tmp_path / "dataset2")],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr
     assert json.loads(proc.stdout)["added"] == 1
 
@@ -414,8 +486,10 @@ def test_item11_a_truncated_dataset_file_is_found_and_rebuilt_from_its_run(one_r
     assert [r for r in caplog.records if ids[0] in r.getMessage() and "rebuilt" in r.getMessage()]
     after = _read_all(dataset)
     for name, frame in before.items():
-        pd.testing.assert_frame_equal(after[name].sort_values(list(after[name].columns[:3])).reset_index(drop=True),
-                                      frame.sort_values(list(frame.columns[:3])).reset_index(drop=True))
+        pd.testing.assert_frame_equal(
+            after[name].sort_values(list(after[name].columns[:3])).reset_index(drop=True),
+            frame.sort_values(list(frame.columns[:3])).reset_index(drop=True),
+        )
     again = aggregate(sweep, dataset)
     assert again.repaired == [] and sorted(again.present) == ids
 
@@ -548,10 +622,14 @@ def test_item16_callbacks_from_the_command_line_run_nothing(tmp_path):
     victim = tmp_path / "victim.txt"
     victim.write_text("keep")
     out = tmp_path / "out"
-    for args in (["+hydra.callbacks.x._target_=shutil.copyfile", f"+hydra.callbacks.x.src={victim}",
-                  f"+hydra.callbacks.x.dst={tmp_path / 'copy.txt'}"],
-                 ["+hydra.callbacks.x._target_=builtins.open", f"+hydra.callbacks.x.file={victim}",
-                  "+hydra.callbacks.x.mode=w"]):
+    for args in (
+        [
+            "+hydra.callbacks.x._target_=shutil.copyfile",
+            f"+hydra.callbacks.x.src={victim}",
+            f"+hydra.callbacks.x.dst={tmp_path / 'copy.txt'}",
+        ],
+        ["+hydra.callbacks.x._target_=builtins.open", f"+hydra.callbacks.x.file={victim}", "+hydra.callbacks.x.mode=w"],
+    ):
         for flags in ([], ["-m"]):
             proc = cli([*flags, *args, f"paths.output_dir={out}"], timeout=120)
             assert proc.returncode == 2
@@ -561,9 +639,14 @@ def test_item16_callbacks_from_the_command_line_run_nothing(tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("override", ["+hydra.launcher._target_=os.system",
-                                      "hydra.job_logging.handlers.console.class=shutil.copyfile",
-                                      "hydra.sweeper._target_=os.system"])
+@pytest.mark.parametrize(
+    "override",
+    [
+        "+hydra.launcher._target_=os.system",
+        "hydra.job_logging.handlers.console.class=shutil.copyfile",
+        "hydra.sweeper._target_=os.system",
+    ],
+)
 def test_item16_no_target_anywhere_under_hydra(override, tmp_path):
     proc = cli([override, f"paths.output_dir={tmp_path / 'out'}"], timeout=120)
     assert proc.returncode == 2
@@ -594,8 +677,16 @@ def test_item17_env_set_pythonpath_plants_nothing(tmp_path):
     (planted / "sitecustomize.py").write_text(f"open({str(marker)!r}, 'w').write('ran')\n")
     out = tmp_path / "out"
     for flags in ([], ["-m"]):
-        proc = cli([*flags, "+experiment=rpr2_mixed", *TINY, f"+hydra.job.env_set.PYTHONPATH={planted}",
-                    f"paths.output_dir={out}"], timeout=120)
+        proc = cli(
+            [
+                *flags,
+                "+experiment=rpr2_mixed",
+                *TINY,
+                f"+hydra.job.env_set.PYTHONPATH={planted}",
+                f"paths.output_dir={out}",
+            ],
+            timeout=120,
+        )
         assert proc.returncode == 2
         one_error_line(proc, "hydra.job.env_set.PYTHONPATH")
     assert not marker.exists() and files_under(out) == []

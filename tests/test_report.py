@@ -26,9 +26,18 @@ def sweep(tmp_path_factory) -> Path:
     root = tmp_path_factory.mktemp("report")
     sweep = root / "sweeps" / "s"
     for job, seed in enumerate((0, 0, 1)):
-        cfg = make_cfg(["+experiment=rpr2_mixed", "+debug=fast", "optimizer.population=4",
-                        "optimizer.generations=2", f"optimizer.seed={seed}", f"paths.output_dir={root}",
-                        "plot.enabled=true", "optimizer.reference=true"])
+        cfg = make_cfg(
+            [
+                "+experiment=rpr2_mixed",
+                "+debug=fast",
+                "optimizer.population=4",
+                "optimizer.generations=2",
+                f"optimizer.seed={seed}",
+                f"paths.output_dir={root}",
+                "plot.enabled=true",
+                "optimizer.reference=true",
+            ]
+        )
         run_study(cfg, sweep / f"{job}_seed={seed}", job)
     aggregate(sweep, root / "dataset")
     return sweep
@@ -50,9 +59,9 @@ def test_report_of_a_relative_path_has_relative_links_that_survive_a_move(sweep,
 @pytest.mark.slow  # the fixture: three tiny runs with figures (~40 s on 2 busy cores)
 def test_report_table_units_gaps_captions_and_seeds(sweep):
     text = build_report(sweep)
-    assert "b [mm]" in text and "q_min [mm]" in text          # design variables with units
+    assert "b [mm]" in text and "q_min [mm]" in text  # design variables with units
     assert "gap to reference [%]" in text
-    assert "rpr2, mixed, w_d = 0.5, ga, seed 0" in text      # captions name what a run is
+    assert "rpr2, mixed, w_d = 0.5, ga, seed 0" in text  # captions name what a run is
     # the repeat of seed 0 is counted once: 3 runs, 2 distinct seeds, 1 repeat
     row = re.search(r"<tr><td>rpr2</td><td>mixed</td><td>0.5</td><td>ga</td>(.*?)</tr>", text).group(1)
     assert re.findall(r"<td>([^<]*)</td>", row)[:4] == ["3", "2", "0, 1", "1"]
@@ -63,7 +72,7 @@ def test_report_table_units_gaps_captions_and_seeds(sweep):
 @pytest.mark.slow  # the fixture: three tiny runs with figures (~40 s on 2 busy cores)
 def test_dataset_report_leaves_debug_runs_out_unless_there_is_nothing_else(sweep):
     dataset = sweep.parents[1] / "dataset"
-    assert read_dataset(dataset).empty                       # all three are +debug=fast runs
+    assert read_dataset(dataset).empty  # all three are +debug=fast runs
     everything = read_dataset(dataset, purposes=None)
     assert len(everything) == 3 and set(everything["purpose"]) == {"debug"}
     assert "debug runs only" in build_report(dataset)

@@ -9,8 +9,9 @@ from kinematics import get_mechanism
 from pipeline.reproduction.extensions import _upper_hull
 from pipeline.reproduction.rpr3 import THESIS, thesis_jacobian_program
 
-PRINTED = np.array([[-0.855658, 0.190268, -0.0903346], [-0.811356, -0.93643, 0.444595],
-                    [-0.00522636, -0.0127963, -0.00770599]])
+PRINTED = np.array(
+    [[-0.855658, 0.190268, -0.0903346], [-0.811356, -0.93643, 0.444595], [-0.00522636, -0.0127963, -0.00770599]]
+)
 
 
 def test_thesis_program_explains_the_printed_jacobian():
@@ -72,8 +73,10 @@ def test_experiment_runs_its_declared_sweep_into_one_dataset_and_is_cached(tmp_p
     columns = ["mechanism", "w_d", "volume", "gdi", "suri", "objective_value"]
     assert second[columns].equals(first[columns])
     alone = Reproduction(tmp_path / "doc2", tmp_path / "other")
-    alone_rows = [alone.experiment("mixed_tradeoff", (*TINY, f"mechanism={m}", f"objective.w_d={w}")).iloc[0]
-                  for m, w in (("rpr2", 1.0), ("tricept", 0.0))]
+    alone_rows = [
+        alone.experiment("mixed_tradeoff", (*TINY, f"mechanism={m}", f"objective.w_d={w}")).iloc[0]
+        for m, w in (("rpr2", 1.0), ("tricept", 0.0))
+    ]
     assert alone_rows[0][columns].equals(first.iloc[8][columns])
     assert alone_rows[1][columns].equals(first.iloc[0][columns])
 
@@ -82,18 +85,30 @@ def test_sweep_jobs_are_hydras_product():
     from pipeline.reproduction.driver import sweep_jobs
 
     assert sweep_jobs({"objective.w_d": "0.25,0.5", "optimizer.seed": "0,1"}) == [
-        ["objective.w_d=0.25", "optimizer.seed=0"], ["objective.w_d=0.25", "optimizer.seed=1"],
-        ["objective.w_d=0.5", "optimizer.seed=0"], ["objective.w_d=0.5", "optimizer.seed=1"]]
+        ["objective.w_d=0.25", "optimizer.seed=0"],
+        ["objective.w_d=0.25", "optimizer.seed=1"],
+        ["objective.w_d=0.5", "optimizer.seed=0"],
+        ["objective.w_d=0.5", "optimizer.seed=1"],
+    ]
     assert sweep_jobs({}) == [[]]
 
 
-@pytest.mark.parametrize("overrides", [
-    ["+experiment=h4_mixed", "objective.w_d=0.25", "optimizer.seed=2", "parallel.n_jobs=1"],
-    ["+experiment=h4_mixed", "+reading=h4_paper_gdi", "objective.w_d=0.7", "optimizer.seed=0"],
-    ["+experiment=tricept_max_volume", "objective.name=mixed", "objective.w_d=0.5", "optimizer.population=20",
-     "optimizer.generations=30", "plot.enabled=false"],
-    ["+experiment=h4_max_volume", "optimizer.seed=1", "paths.output_dir=/tmp/x"],
-])
+@pytest.mark.parametrize(
+    "overrides",
+    [
+        ["+experiment=h4_mixed", "objective.w_d=0.25", "optimizer.seed=2", "parallel.n_jobs=1"],
+        ["+experiment=h4_mixed", "+reading=h4_paper_gdi", "objective.w_d=0.7", "optimizer.seed=0"],
+        [
+            "+experiment=tricept_max_volume",
+            "objective.name=mixed",
+            "objective.w_d=0.5",
+            "optimizer.population=20",
+            "optimizer.generations=30",
+            "plot.enabled=false",
+        ],
+        ["+experiment=h4_max_volume", "optimizer.seed=1", "paths.output_dir=/tmp/x"],
+    ],
+)
 def test_reproduction_compose_equals_hydras(overrides, tmp_path):
     from hydra import compose, initialize_config_dir
     from omegaconf import OmegaConf

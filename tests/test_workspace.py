@@ -83,17 +83,22 @@ def test_h4_resolution_error_below_one_percent():
 def test_volume_and_gdi_converge():
     m = get_mechanism("rpr2", **PAPER_DESIGNS["rpr2"])
     exact = m.exact_area()
+
     # the midpoint rule on an indicator is not monotone in r (lattice effects):
     # compare the worst error over a window of coarse and of fine resolutions
     def worst(resolutions):
-        return max(abs(evaluate(m, resolution=r, min_inverse_condition=0.0,
-                                error_estimate=False).volume - exact) for r in resolutions)
+        return max(
+            abs(evaluate(m, resolution=r, min_inverse_condition=0.0, error_estimate=False).volume - exact)
+            for r in resolutions
+        )
 
     assert worst((320, 400, 480)) < worst((20, 25, 30)) / 10
     h4 = get_mechanism("h4", **TABLE1)
     ref = evaluate(h4, resolution=64, error_estimate=False)
-    gdi_err = [max(abs(evaluate(h4, resolution=r, error_estimate=False).gdi - ref.gdi) for r in window)
-               for window in ((4, 5, 6), (16, 18, 20))]
+    gdi_err = [
+        max(abs(evaluate(h4, resolution=r, error_estimate=False).gdi - ref.gdi) for r in window)
+        for window in ((4, 5, 6), (16, 18, 20))
+    ]
     assert gdi_err[1] < gdi_err[0]
 
 

@@ -14,5 +14,6 @@ class CheckedSweeper(sweeper.CheckedSweeper):
     """See :mod:`pipeline.sweeps.sweeper`."""
 
 
-ConfigStore.instance().store(group="hydra/sweeper", name="checked", node=sweeper.CheckedSweeperConf,
-                             provider="pm-design")
+ConfigStore.instance().store(
+    group="hydra/sweeper", name="checked", node=sweeper.CheckedSweeperConf, provider="pm-design"
+)

@@ -20,6 +20,21 @@ from pipeline.config.validate import NODES_PER_SECOND, validate
 from pipeline.errors import ConfigError
 from pipeline.optimizers import REFERENCE_OPTIMIZER, OptimizerConfig
 
-__all__ = ["CONFIG_DIR", "Config", "ConfigError", "DesignSpace", "EvaluateConfig", "MechanismConfig",
-           "NODES_PER_SECOND", "ObjectiveConfig", "OptimizerConfig", "ParallelConfig", "PathsConfig", "PlotConfig",
-           "REFERENCE_OPTIMIZER", "SampleConfig", "register_configs", "validate"]
+__all__ = [
+    "CONFIG_DIR",
+    "Config",
+    "ConfigError",
+    "DesignSpace",
+    "EvaluateConfig",
+    "MechanismConfig",
+    "NODES_PER_SECOND",
+    "ObjectiveConfig",
+    "OptimizerConfig",
+    "ParallelConfig",
+    "PathsConfig",
+    "PlotConfig",
+    "REFERENCE_OPTIMIZER",
+    "SampleConfig",
+    "register_configs",
+    "validate",
+]

@@ -49,18 +49,24 @@ def check_override_key(key: str, value: str = "") -> None:
         return
     parts = re.split(r"[./]", key)
     if "callbacks" in parts[:2]:
-        raise ConfigError(f"{key} is refused: hydra.callbacks cannot be set from the command line "
-                          f"(they run code); allowed: the project's own callbacks in its config files")
+        raise ConfigError(
+            f"{key} is refused: hydra.callbacks cannot be set from the command line "
+            f"(they run code); allowed: the project's own callbacks in its config files"
+        )
     found = _CALLABLE_KEYS.intersection(parts)
     if found:
-        raise ConfigError(f"{key} is refused: '{found.pop()}' under hydra.* names code to run; "
-                          f"allowed: plain values and Hydra's config groups (hydra/launcher=joblib)")
+        raise ConfigError(
+            f"{key} is refused: '{found.pop()}' under hydra.* names code to run; "
+            f"allowed: plain values and Hydra's config groups (hydra/launcher=joblib)"
+        )
     if key.startswith("hydra.job.env_set"):
-        name = key[len("hydra.job.env_set"):].lstrip(".")
+        name = key[len("hydra.job.env_set") :].lstrip(".")
         if name not in ENV_ALLOWED:
-            raise ConfigError(f"{key} is refused: a job's environment is not set from the command line "
-                              f"(PYTHONPATH and the like would run code in the workers); "
-                              f"allowed keys: {', '.join(ENV_ALLOWED)}")
+            raise ConfigError(
+                f"{key} is refused: a job's environment is not set from the command line "
+                f"(PYTHONPATH and the like would run code in the workers); "
+                f"allowed keys: {', '.join(ENV_ALLOWED)}"
+            )
         if value and not value.isdigit():
             raise ConfigError(f"{key}={value!r} is invalid: allowed a positive integer")
     if key.startswith("hydra.job.env_copy"):
@@ -76,8 +82,10 @@ def check_hydra_node(hydra: DictConfig) -> None:
     for name in callbacks:
         target = str(OmegaConf.select(callbacks, f"{name}._target_", default=""))
         if not target.startswith(CALLBACK_PREFIXES):
-            raise ConfigError(f"hydra.callbacks.{name}._target_={target!r} is refused: allowed callbacks "
-                              f"under {', '.join(CALLBACK_PREFIXES)}")
+            raise ConfigError(
+                f"hydra.callbacks.{name}._target_={target!r} is refused: allowed callbacks "
+                f"under {', '.join(CALLBACK_PREFIXES)}"
+            )
     for path, key, target in _targets(OmegaConf.to_container(hydra, resolve=False), "hydra"):
         if path.startswith("hydra.callbacks."):
             continue

@@ -13,7 +13,6 @@ from hydra.core.config_store import ConfigStore
 from omegaconf import OmegaConf
 
 from kinematics import MECHANISMS
-from pipeline import CONFIG_DIR
 from pipeline.config.schema import Config, MechanismConfig, ObjectiveConfig
 from pipeline.objectives import OBJECTIVES
 from pipeline.optimizers import OPTIMIZERS

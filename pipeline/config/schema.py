@@ -23,8 +23,8 @@ import numpy as np
 from omegaconf import MISSING
 
 from kinematics import MECHANISMS, resolve_mechanism
-from kinematics.plugins import PluginError
 from kinematics.base import Mechanism
+from kinematics.plugins import PluginError
 from pipeline.errors import ConfigError, check, finite
 from pipeline.objectives import OBJECTIVES
 from pipeline.optimizers.base import MAX_SEED
@@ -70,10 +70,14 @@ class MechanismConfig:
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not (self.name in MECHANISMS or ":" in self.name):
-            check("mechanism.name", self.name, False, "one of " + ", ".join(MECHANISMS)
-                  + ", or 'package.module:Class' with mechanism=path")
+            check(
+                "mechanism.name",
+                self.name,
+                False,
+                "one of " + ", ".join(MECHANISMS) + ", or 'package.module:Class' with mechanism=path",
+            )
         try:
-            self.cls
+            resolve_mechanism(self.name)
         except PluginError as exc:
             raise ConfigError(f"mechanism.name={self.name!r} is invalid: {exc}") from None
         cls = self.cls
@@ -87,18 +91,34 @@ class MechanismConfig:
             values = getattr(d, key)
             check(f"mechanism.design.{key}", values, len(values) == len(expected), f"{len(expected)} numbers")
         for name, lo, hi in zip(expected, d.lower, d.upper):
-            check(f"mechanism.design bounds of {name}", [lo, hi], finite(lo) and finite(hi) and lo < hi,
-                  "finite numbers with lower < upper")
+            check(
+                f"mechanism.design bounds of {name}",
+                [lo, hi],
+                finite(lo) and finite(hi) and lo < hi,
+                "finite numbers with lower < upper",
+            )
         self.fixed = _checked_fixed(cls, dict(self.fixed))
         if self.orientation is not None:
             o = list(self.orientation)
-            check("mechanism.orientation", o, len(o) == 2 and all(finite(v) for v in o)
-                  and -360 <= o[0] <= o[1] <= 360, "null or [lo, hi] in degrees, -360 <= lo <= hi <= 360")
+            check(
+                "mechanism.orientation",
+                o,
+                len(o) == 2 and all(finite(v) for v in o) and -360 <= o[0] <= o[1] <= 360,
+                "null or [lo, hi] in degrees, -360 <= lo <= hi <= 360",
+            )
             self.orientation = [float(v) for v in o]
-        check("mechanism.min_inverse_condition", self.min_inverse_condition,
-              finite(self.min_inverse_condition) and 0 <= self.min_inverse_condition < 1, "[0, 1)")
-        check("mechanism.length", self.length, self.length is None or (finite(self.length) and self.length > 0),
-              "null or a finite number > 0")
+        check(
+            "mechanism.min_inverse_condition",
+            self.min_inverse_condition,
+            finite(self.min_inverse_condition) and 0 <= self.min_inverse_condition < 1,
+            "[0, 1)",
+        )
+        check(
+            "mechanism.length",
+            self.length,
+            self.length is None or (finite(self.length) and self.length > 0),
+            "null or a finite number > 0",
+        )
         try:
             self.build(self.centre)
         except (TypeError, ValueError) as exc:
@@ -131,17 +151,22 @@ class MechanismConfig:
         return options
 
     @classmethod
-    def for_class(cls, mechanism: type[Mechanism]) -> "MechanismConfig":
+    def for_class(cls, mechanism: type[Mechanism]) -> MechanismConfig:
         """The default config of a mechanism class (its Hydra group option)."""
         probe_orientation = None
         if any(mechanism.angular):
             lo, hi = _default_orientation(mechanism)
             probe_orientation = [round(math.degrees(lo), 9), round(math.degrees(hi), 9)]
-        return cls(name=mechanism.name, fixed=dict(mechanism.default_fixed),
-                   design=DesignSpace(names=[v.name for v in mechanism.design_variables],
-                                      lower=[v.lower for v in mechanism.design_variables],
-                                      upper=[v.upper for v in mechanism.design_variables]),
-                   orientation=probe_orientation)
+        return cls(
+            name=mechanism.name,
+            fixed=dict(mechanism.default_fixed),
+            design=DesignSpace(
+                names=[v.name for v in mechanism.design_variables],
+                lower=[v.lower for v in mechanism.design_variables],
+                upper=[v.upper for v in mechanism.design_variables],
+            ),
+            orientation=probe_orientation,
+        )
 
 
 def _checked_fixed(cls: type[Mechanism], given: dict[str, Any]) -> dict[str, Any]:
@@ -156,8 +181,10 @@ def _checked_fixed(cls: type[Mechanism], given: dict[str, Any]) -> dict[str, Any
         check(f"mechanism.fixed.{name}", given[name], name in declared, f"keys {keys} for {cls.name}")
     for name in cls.default_fixed:
         if name not in declared:
-            raise ConfigError(f"mechanism.fixed.{name} is invalid: {cls.__name__} declares no range for it "
-                              f"(kinematics.base.FixedParameter in fixed_parameters); allowed: keys {keys}")
+            raise ConfigError(
+                f"mechanism.fixed.{name} is invalid: {cls.__name__} declares no range for it "
+                f"(kinematics.base.FixedParameter in fixed_parameters); allowed: keys {keys}"
+            )
     fixed = {**cls.default_fixed, **given}
     for name, value in fixed.items():
         p = declared[name]
@@ -222,12 +249,17 @@ class EvaluateConfig:
     max_hours: float = 12.0
 
     def __post_init__(self) -> None:
-        check("evaluate.resolution", self.resolution, self.resolution is None or 1 <= self.resolution <= 100_000,
-              "null or an integer in [1, 100000]")
+        check(
+            "evaluate.resolution",
+            self.resolution,
+            self.resolution is None or 1 <= self.resolution <= 100_000,
+            "null or an integer in [1, 100000]",
+        )
         check("evaluate.refine_factor", self.refine_factor, 1 <= self.refine_factor <= 8, "an integer in [1, 8]")
         check("evaluate.max_nodes", self.max_nodes, 1_000 <= self.max_nodes <= 10**9, "an integer in [1000, 1e9]")
-        check("evaluate.max_hours", self.max_hours, finite(self.max_hours) and 0 < self.max_hours <= 10_000,
-              "(0, 10000]")
+        check(
+            "evaluate.max_hours", self.max_hours, finite(self.max_hours) and 0 < self.max_hours <= 10_000, "(0, 10000]"
+        )
 
 
 @dataclass
@@ -245,9 +277,12 @@ class ParallelConfig:
         check("parallel.n_jobs", self.n_jobs, 1 <= self.n_jobs <= 1024, "an integer in [1, 1024]")
         check("parallel.backend", self.backend, self.backend in BACKENDS, "one of " + ", ".join(BACKENDS))
         address = self.scheduler_address
-        check("parallel.scheduler_address", address,
-              address is None or re.fullmatch(r"(tcp|tls)://[^\s:/]+:\d{1,5}", address) is not None,
-              "null or tcp://host:port")
+        check(
+            "parallel.scheduler_address",
+            address,
+            address is None or re.fullmatch(r"(tcp|tls)://[^\s:/]+:\d{1,5}", address) is not None,
+            "null or tcp://host:port",
+        )
 
 
 @dataclass
@@ -296,9 +331,12 @@ class Config:
     plot: PlotConfig = field(default_factory=PlotConfig)
 
     def __post_init__(self) -> None:
-        check("experiment_name", self.experiment_name,
-              isinstance(self.experiment_name, str) and bool(_PLAIN_NAME.match(self.experiment_name)),
-              "a plain name of letters, digits, '_', '.', '-' (no '/', at most 100 characters)")
+        check(
+            "experiment_name",
+            self.experiment_name,
+            isinstance(self.experiment_name, str) and bool(_PLAIN_NAME.match(self.experiment_name)),
+            "a plain name of letters, digits, '_', '.', '-' (no '/', at most 100 characters)",
+        )
         check("purpose", self.purpose, self.purpose in PURPOSES, "one of " + ", ".join(PURPOSES))
 
     #: sections that say how to run, not what to compute: kept out of result files
@@ -315,5 +353,3 @@ class Config:
         """Content hash (16 hex digits) of :meth:`result_dict`: equal for equal studies."""
         text = json.dumps(self.result_dict(), sort_keys=True, default=str)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
-
-

@@ -50,4 +50,3 @@ def key_suggestion(dotted_key: str) -> str:
     parent, _, leaf = dotted_key.lstrip("+~").rpartition(".")
     suggestion = did_you_mean(leaf, section_keys(parent))
     return suggestion.replace("did you mean ", f"did you mean {parent}." if parent else "did you mean ")
-

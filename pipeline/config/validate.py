@@ -53,8 +53,10 @@ def validate(cfg: DictConfig | Config) -> Config:
         name = optimizer.get("name") if isinstance(optimizer, DictConfig) else None
         check("optimizer.name", name, name in OPTIMIZERS, "one of " + ", ".join(OPTIMIZERS))
         if OmegaConf.get_type(optimizer) is not OPTIMIZERS[name].Config:
-            raise ConfigError(f"optimizer.name={name!r} is invalid: choose the optimiser with "
-                              f"optimizer={name} (allowed: {', '.join(OPTIMIZERS)})")
+            raise ConfigError(
+                f"optimizer.name={name!r} is invalid: choose the optimiser with "
+                f"optimizer={name} (allowed: {', '.join(OPTIMIZERS)})"
+            )
         try:
             if "hydra" in cfg:  # a sweep job's config carries Hydra's own node
                 cfg = copy.deepcopy(cfg)
@@ -83,22 +85,28 @@ def _check_budget(c: Config) -> None:
     n_axes = max(len(sampled_axes(mech, orientation)), 1)
     res = c.evaluate.resolution
     if res is not None and res < mech.min_resolution and not c.evaluate.allow_coarse:
-        raise ConfigError(f"evaluate.resolution={res} is invalid: allowed >= {mech.min_resolution} for "
-                          f"{c.mechanism.name} (coarser grids err by more than ~3 % in V or GDI; "
-                          f"evaluate.allow_coarse=true to accept that)")
+        raise ConfigError(
+            f"evaluate.resolution={res} is invalid: allowed >= {mech.min_resolution} for "
+            f"{c.mechanism.name} (coarser grids err by more than ~3 % in V or GDI; "
+            f"evaluate.allow_coarse=true to accept that)"
+        )
     res = res or default_resolution(mech, orientation)
     refined_nodes = float(res * c.evaluate.refine_factor) ** n_axes
     if refined_nodes > c.evaluate.max_nodes:
         top = int(c.evaluate.max_nodes ** (1 / n_axes) / c.evaluate.refine_factor)
-        raise ConfigError(f"evaluate.resolution={res} is invalid: allowed <= {top} for {c.mechanism.name} "
-                          f"({n_axes} sampled axes x refine_factor {c.evaluate.refine_factor} give "
-                          f"{refined_nodes:.3g} nodes > evaluate.max_nodes={c.evaluate.max_nodes})")
+        raise ConfigError(
+            f"evaluate.resolution={res} is invalid: allowed <= {top} for {c.mechanism.name} "
+            f"({n_axes} sampled axes x refine_factor {c.evaluate.refine_factor} give "
+            f"{refined_nodes:.3g} nodes > evaluate.max_nodes={c.evaluate.max_nodes})"
+        )
     evaluations = c.sample.n + OPTIMIZERS[c.optimizer.name](c.optimizer).expected_evaluations()
     hours = evaluations * float(res) ** n_axes / (NODES_PER_SECOND * c.parallel.n_jobs) / 3600
     if hours > c.evaluate.max_hours:
-        raise ConfigError(f"evaluate.resolution={res} is invalid: the run is estimated at {hours:.3g} h "
-                          f"> evaluate.max_hours={c.evaluate.max_hours} ({evaluations} evaluations of "
-                          f"{float(res) ** n_axes:.3g} nodes at {NODES_PER_SECOND:.0e} nodes/s/worker)")
+        raise ConfigError(
+            f"evaluate.resolution={res} is invalid: the run is estimated at {hours:.3g} h "
+            f"> evaluate.max_hours={c.evaluate.max_hours} ({evaluations} evaluations of "
+            f"{float(res) ** n_axes:.3g} nodes at {NODES_PER_SECOND:.0e} nodes/s/worker)"
+        )
 
 
 def _check_kernels() -> None:
@@ -118,15 +126,17 @@ def _check_parallel(p: ParallelConfig) -> None:
     try:
         import distributed  # noqa: F401  (only when the dask backend is asked for)
     except ImportError:
-        raise ConfigError("parallel.backend='dask' is invalid: dask.distributed is not installed "
-                          "(pip install -e \".[dask]\"); allowed without it: loky, threading, multiprocessing") from None
+        raise ConfigError(
+            "parallel.backend='dask' is invalid: dask.distributed is not installed "
+            '(pip install -e ".[dask]"); allowed without it: loky, threading, multiprocessing'
+        ) from None
     if p.scheduler_address:
         host, port = p.scheduler_address.split("://", 1)[1].rsplit(":", 1)
         try:
             socket.create_connection((host, int(port)), timeout=5).close()
         except OSError as exc:
-            raise ConfigError(f"parallel.scheduler_address={p.scheduler_address!r} is invalid: no scheduler "
-                              f"answers there ({exc.strerror or exc}); allowed: a reachable "
-                              f"tcp://host:port or null for a local cluster") from None
-
-
+            raise ConfigError(
+                f"parallel.scheduler_address={p.scheduler_address!r} is invalid: no scheduler "
+                f"answers there ({exc.strerror or exc}); allowed: a reachable "
+                f"tcp://host:port or null for a local cluster"
+            ) from None

@@ -40,12 +40,15 @@ class MechanismSpec:
     options: tuple[tuple[str, object], ...]
 
     @classmethod
-    def of(cls, mechanism) -> "MechanismSpec":
+    def of(cls, mechanism) -> MechanismSpec:
         """The spec of a ``MechanismConfig`` (``pipeline.config``) or of a spec."""
         if isinstance(mechanism, cls):
             return mechanism
-        return cls(mechanism.name, tuple(sorted(mechanism.fixed.items())),
-                   tuple(sorted(mechanism.evaluation_options().items())))
+        return cls(
+            mechanism.name,
+            tuple(sorted(mechanism.fixed.items())),
+            tuple(sorted(mechanism.evaluation_options().items())),
+        )
 
     def build(self, design: np.ndarray):
         """The mechanism of one design vector (design units); ValueError if infeasible."""
@@ -94,12 +97,16 @@ class DesignEvaluator:
         # contiguous equal chunks: no straggler beyond one design
         chunks = np.array_split(designs, n_chunks)
         if pool is not None:
-            parts = pool.map(_evaluate_chunk, [(spec, self.resolution, c) for c in chunks[1:]],
-                             local=lambda: _evaluate_chunk(spec, self.resolution, chunks[0]),
-                             timeout=CHUNK_TIMEOUT + SECONDS_PER_DESIGN * len(chunks[1]))
+            parts = pool.map(
+                _evaluate_chunk,
+                [(spec, self.resolution, c) for c in chunks[1:]],
+                local=lambda: _evaluate_chunk(spec, self.resolution, chunks[0]),
+                timeout=CHUNK_TIMEOUT + SECONDS_PER_DESIGN * len(chunks[1]),
+            )
         else:  # dask, threading, multiprocessing: joblib's dispatch
-            parts = retry_lost_workers(lambda: Parallel(n_jobs=n_chunks)(
-                delayed(_evaluate_chunk)(spec, self.resolution, c) for c in chunks))
+            parts = retry_lost_workers(
+                lambda: Parallel(n_jobs=n_chunks)(delayed(_evaluate_chunk)(spec, self.resolution, c) for c in chunks)
+            )
         return np.vstack(parts)
 
 

@@ -43,8 +43,7 @@ log = logging.getLogger(__name__)
 
 #: one thread per worker in numerical libraries (as joblib sets for its loky workers):
 #: the workers already use every core
-WORKER_ENV = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
-                                     "NUMBA_NUM_THREADS")}
+WORKER_ENV = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")}
 
 
 #: seconds between two checks, in each worker, that the process that started it is alive
@@ -123,8 +122,7 @@ def start_worker(parent: int, preload: tuple[str, ...]) -> None:
     parent die; after a SIGKILL of the run (the OOM killer) it would wait for a task for
     ever (or ~35 s with loky's idle timeout). A daemon thread ends it once it is orphaned.
     """
-    threading.Thread(target=_exit_when_orphaned, args=(parent,), name="pm-design-orphan-watch",
-                     daemon=True).start()
+    threading.Thread(target=_exit_when_orphaned, args=(parent,), name="pm-design-orphan-watch", daemon=True).start()
     for module in preload:
         importlib.import_module(module)
 
@@ -150,8 +148,13 @@ class FitnessPool:
         self.n_workers = n_workers
         self.closed = False
         # no idle timeout: the pool is kept for the run (ended at exit, or at once after Ctrl-C)
-        self._executor = ProcessPoolExecutor(max_workers=n_workers, env=WORKER_ENV, timeout=None,
-                                             initializer=start_worker, initargs=(os.getpid(), preload))
+        self._executor = ProcessPoolExecutor(
+            max_workers=n_workers,
+            env=WORKER_ENV,
+            timeout=None,
+            initializer=start_worker,
+            initargs=(os.getpid(), preload),
+        )
         try:
             with sigint_blocked():  # loky starts the workers and its manager thread at the first submit
                 self._executor.submit(os.getpid)
@@ -159,8 +162,9 @@ class FitnessPool:
             self.close(kill=True)
             raise
 
-    def map(self, func: Callable[..., T], argument_tuples: list[tuple], local: Callable[[], T],
-            timeout: float) -> list[T]:
+    def map(
+        self, func: Callable[..., T], argument_tuples: list[tuple], local: Callable[[], T], timeout: float
+    ) -> list[T]:
         """``[local(), func(*args_1), func(*args_2), ...]``: each tuple on a worker, ``local`` here meanwhile.
 
         Raises what a call raised (``local``'s first, then the workers' in order, each with
@@ -182,8 +186,9 @@ class FitnessPool:
                 local_error = exc
             _, pending = concurrent.futures.wait(futures, timeout=timeout)
             if pending:
-                raise TimeoutError(f"{len(pending)} of {len(futures)} fitness workers gave no result "
-                                   f"within {timeout:g} s")
+                raise TimeoutError(
+                    f"{len(pending)} of {len(futures)} fitness workers gave no result within {timeout:g} s"
+                )
             results = [mine] if local_error is None else []
             errors = [f.exception() for f in futures]
         except BaseException:  # Ctrl-C, a timeout, a broken pool: no worker may outlive it

@@ -36,8 +36,11 @@ def workers_for(n_jobs: int, batch: int) -> int:
 def lost_worker(exc: BaseException) -> bool:
     """True for the errors dask raises when a worker (not the computation) failed."""
     module = type(exc).__module__ or ""
-    return isinstance(exc, CancelledError) or module.startswith("distributed") or \
-        type(exc).__name__ in ("FutureCancelledError", "KilledWorker", "CommClosedError")
+    return (
+        isinstance(exc, CancelledError)
+        or module.startswith("distributed")
+        or type(exc).__name__ in ("FutureCancelledError", "KilledWorker", "CommClosedError")
+    )
 
 
 def dask_workers_left() -> int:
@@ -62,6 +65,7 @@ def retry_lost_workers(batch: Callable[[], T], workers_left: Callable[[], int] |
             left = (workers_left or dask_workers_left)()
             if left == 0:
                 raise
-            log.warning("evaluate: a dask worker was lost (%s); batch sent again to the %d left",
-                        type(exc).__name__, left)
+            log.warning(
+                "evaluate: a dask worker was lost (%s); batch sent again to the %d left", type(exc).__name__, left
+            )
     raise AssertionError("unreachable")

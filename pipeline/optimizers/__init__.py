@@ -34,5 +34,13 @@ def reference_optimum(problem: Problem, seed: int) -> PolishResult:
     return polish(problem, found.x, found.fun)
 
 
-__all__ = ["OPTIMIZERS", "REFERENCE_EVALUATIONS", "REFERENCE_OPTIMIZER", "OptimizationResult", "Optimizer",
-           "OptimizerConfig", "Problem", "reference_optimum"]
+__all__ = [
+    "OPTIMIZERS",
+    "REFERENCE_EVALUATIONS",
+    "REFERENCE_OPTIMIZER",
+    "OptimizationResult",
+    "Optimizer",
+    "OptimizerConfig",
+    "Problem",
+    "reference_optimum",
+]

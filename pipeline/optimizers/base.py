@@ -56,14 +56,22 @@ class OptimizerConfig:
 
     def __post_init__(self) -> None:
         check("optimizer.seed", self.seed, 0 <= self.seed <= MAX_SEED, f"an integer in [0, {MAX_SEED}]")
-        check("optimizer.polish_evaluations", self.polish_evaluations, 1 <= self.polish_evaluations <= 100_000,
-              "an integer in [1, 100000]")
+        check(
+            "optimizer.polish_evaluations",
+            self.polish_evaluations,
+            1 <= self.polish_evaluations <= 100_000,
+            "an integer in [1, 100000]",
+        )
 
 
 def check_generations(population: int, generations: int, min_population: int) -> None:
     """The population and generation counts of a generational optimiser (ConfigError if out of range)."""
-    check("optimizer.population", population, min_population <= population <= 100_000,
-          f"an integer in [{min_population}, 100000]")
+    check(
+        "optimizer.population",
+        population,
+        min_population <= population <= 100_000,
+        f"an integer in [{min_population}, 100000]",
+    )
     check("optimizer.generations", generations, 1 <= generations <= 1_000_000, "an integer in [1, 1000000]")
 
 
@@ -81,13 +89,11 @@ class Problem:
         1, or m for a multi-objective problem.
     """
 
-    def __init__(self, function: BatchFunction, lower: np.ndarray, upper: np.ndarray,
-                 n_objectives: int = 1) -> None:
+    def __init__(self, function: BatchFunction, lower: np.ndarray, upper: np.ndarray, n_objectives: int = 1) -> None:
         self.lower = np.asarray(lower, dtype=float)
         self.upper = np.asarray(upper, dtype=float)
         if self.lower.ndim != 1 or self.lower.shape != self.upper.shape:
-            raise ValueError(f"lower and upper must be 1-D of one length; got {self.lower.shape}, "
-                             f"{self.upper.shape}")
+            raise ValueError(f"lower and upper must be 1-D of one length; got {self.lower.shape}, {self.upper.shape}")
         if not np.all(np.isfinite(self.lower) & np.isfinite(self.upper) & (self.lower < self.upper)):
             raise ValueError("bounds must be finite with lower < upper for every variable")
         self._function = function
@@ -134,16 +140,26 @@ class History:
         if progress_bars_enabled():
             from tqdm import tqdm
 
-            self._bar = tqdm(total=expected_generations, desc=label.strip(" :") or "optimise", unit="gen",
-                             leave=False, dynamic_ncols=True)
+            self._bar = tqdm(
+                total=expected_generations,
+                desc=label.strip(" :") or "optimise",
+                unit="gen",
+                leave=False,
+                dynamic_ncols=True,
+            )
 
     def record(self, population: np.ndarray, values: np.ndarray, n_new: int, **extra: float) -> None:
         values = np.asarray(values, dtype=float)
         first = values if values.ndim == 1 else values[:, 0]
         best = int(np.argmax(first))
-        row = {"generation": len(self.rows), "best": float(first[best]), "mean": float(first.mean()),
-               "worst": float(first.min()), "n_evaluations": int(n_new),
-               "wall_time": time.perf_counter() - self.start}
+        row = {
+            "generation": len(self.rows),
+            "best": float(first[best]),
+            "mean": float(first.mean()),
+            "worst": float(first.min()),
+            "n_evaluations": int(n_new),
+            "wall_time": time.perf_counter() - self.start,
+        }
         row.update({f"x{j}": float(v) for j, v in enumerate(population[best])})
         row.update(extra)
         self.rows.append(row)
@@ -153,8 +169,14 @@ class History:
         elapsed = row["wall_time"]
         evaluations = sum(r["n_evaluations"] for r in self.rows)
         rate = evaluations / elapsed if elapsed > 0 else math.inf
-        log.debug("%sgeneration %d: best %.6g, mean %.6g, %d evaluations", self.label, row["generation"],
-                  row["best"], row["mean"], evaluations)
+        log.debug(
+            "%sgeneration %d: best %.6g, mean %.6g, %d evaluations",
+            self.label,
+            row["generation"],
+            row["best"],
+            row["mean"],
+            evaluations,
+        )
         if self._bar is not None:
             if row["generation"] > 0:
                 self._bar.update(1)

@@ -78,18 +78,31 @@ class CMAESConfig(OptimizerConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check("optimizer.max_evaluations", self.max_evaluations, 10 <= self.max_evaluations <= 10_000_000,
-              "an integer in [10, 10000000]")
+        check(
+            "optimizer.max_evaluations",
+            self.max_evaluations,
+            10 <= self.max_evaluations <= 10_000_000,
+            "an integer in [10, 10000000]",
+        )
         check("optimizer.sigma0", self.sigma0, finite(self.sigma0) and 0 < self.sigma0 <= 1, "(0, 1]")
-        check("optimizer.popsize", self.popsize, self.popsize is None or 2 <= self.popsize <= 10_000,
-              "null or an integer in [2, 10000]")
+        check(
+            "optimizer.popsize",
+            self.popsize,
+            self.popsize is None or 2 <= self.popsize <= 10_000,
+            "null or an integer in [2, 10000]",
+        )
         check("optimizer.restarts", self.restarts, 0 <= self.restarts <= 20, "an integer in [0, 20]")
         check("optimizer.scout", self.scout, 0 <= self.scout <= 100_000, "an integer in [0, 100000]")
         check("optimizer.starts", self.starts, 0 <= self.starts <= 100, "an integer in [0, 100]")
-        check("optimizer.basin_radius", self.basin_radius,
-              finite(self.basin_radius) and 0 <= self.basin_radius <= 2, "[0, 2]")
-        check("optimizer.local_sigma", self.local_sigma, finite(self.local_sigma) and 0 < self.local_sigma <= 1,
-              "(0, 1]")
+        check(
+            "optimizer.basin_radius",
+            self.basin_radius,
+            finite(self.basin_radius) and 0 <= self.basin_radius <= 2,
+            "[0, 2]",
+        )
+        check(
+            "optimizer.local_sigma", self.local_sigma, finite(self.local_sigma) and 0 < self.local_sigma <= 1, "(0, 1]"
+        )
         check("optimizer.tolx", self.tolx, finite(self.tolx) and 0 < self.tolx < 1, "(0, 1)")
 
 
@@ -146,8 +159,11 @@ class CMAES(Optimizer):
             return c.max_evaluations - (problem.n_evaluations - start_count)
 
         starts = []
-        given = (np.clip(np.atleast_2d(initial), problem.lower, problem.upper) - lower) / span \
-            if initial is not None and len(initial) else np.empty((0, problem.n_var))
+        given = (
+            (np.clip(np.atleast_2d(initial), problem.lower, problem.upper) - lower) / span
+            if initial is not None and len(initial)
+            else np.empty((0, problem.n_var))
+        )
         # the scout takes at most a quarter of the budget (a tiny budget still leaves local steps)
         # (a power of two: the Sobol sequence's balance holds for those)
         n_scout = min(c.scout, c.max_evaluations // 4 - len(given))
@@ -156,8 +172,9 @@ class CMAES(Optimizer):
             sobol = qmc.Sobol(d=problem.n_var, scramble=True, seed=rng).random(n_scout)
             scouts = np.vstack([given, sobol])
             values = evaluate(scouts, restart=-1)
-            starts = [(scouts[k], c.local_sigma, popsize) for k in
-                      distinct_basins(scouts, values, c.starts, c.basin_radius)]
+            starts = [
+                (scouts[k], c.local_sigma, popsize) for k in distinct_basins(scouts, values, c.starts, c.basin_radius)
+            ]
         elif len(given):
             starts = [(given[0], c.sigma0, popsize)]
         else:
@@ -178,18 +195,33 @@ class CMAES(Optimizer):
             messages.append(self._one_run(x0, sigma, size, budget, rng, evaluate, run))
         if best["x"] is None:  # budget below one generation: evaluate the start
             evaluate(np.full((1, problem.n_var), 0.5), restart=0)
-        return OptimizationResult(x=best["x"], fun=best["f"], history=history.frame(),
-                                  n_evaluations=problem.n_evaluations - start_count, method="cmaes",
-                                  message="; ".join(messages))
+        return OptimizationResult(
+            x=best["x"],
+            fun=best["f"],
+            history=history.frame(),
+            n_evaluations=problem.n_evaluations - start_count,
+            method="cmaes",
+            message="; ".join(messages),
+        )
 
-    def _one_run(self, x0: np.ndarray, sigma: float, popsize: int, budget: int, rng: np.random.Generator,
-                 evaluate, run: int) -> str:
+    def _one_run(
+        self, x0: np.ndarray, sigma: float, popsize: int, budget: int, rng: np.random.Generator, evaluate, run: int
+    ) -> str:
         """One CMA-ES run in the unit box from ``x0``; returns its stop message."""
         import cma  # imports scipy.stats and pyplot (~1 s): only when a CMA-ES run starts
 
-        options = {"bounds": [0.0, 1.0], "popsize": popsize, "maxfevals": budget, "verbose": -9,
-                   "seed": np.nan, "randn": lambda *shape: rng.standard_normal(shape),
-                   "tolfun": 0.0, "tolfunhist": 0.0, "tolx": self.config.tolx, "CMA_stds": None}
+        options = {
+            "bounds": [0.0, 1.0],
+            "popsize": popsize,
+            "maxfevals": budget,
+            "verbose": -9,
+            "seed": np.nan,
+            "randn": lambda *shape: rng.standard_normal(shape),
+            "tolfun": 0.0,
+            "tolfunhist": 0.0,
+            "tolx": self.config.tolx,
+            "CMA_stds": None,
+        }
         with warnings.catch_warnings():  # cma warns about its own restarts and flat fitness
             warnings.simplefilter("ignore")
             es = cma.CMAEvolutionStrategy(np.clip(x0, 0.0, 1.0), sigma, options)

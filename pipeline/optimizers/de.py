@@ -16,7 +16,7 @@ import numpy as np
 from scipy.optimize import differential_evolution as scipy_de
 
 from pipeline.errors import check, finite
-from pipeline.optimizers.base import check_generations, History, OptimizationResult, Optimizer, OptimizerConfig, Problem
+from pipeline.optimizers.base import History, OptimizationResult, Optimizer, OptimizerConfig, Problem, check_generations
 
 
 @dataclass
@@ -37,8 +37,12 @@ class DEConfig(OptimizerConfig):
         super().__post_init__()
         check_generations(self.population, self.generations, 5)
         check("optimizer.mutation", self.mutation, finite(self.mutation) and 0 < self.mutation < 2, "(0, 2)")
-        check("optimizer.recombination", self.recombination,
-              finite(self.recombination) and 0 <= self.recombination <= 1, "[0, 1]")
+        check(
+            "optimizer.recombination",
+            self.recombination,
+            finite(self.recombination) and 0 <= self.recombination <= 1,
+            "[0, 1]",
+        )
 
 
 class DE(Optimizer):
@@ -60,14 +64,32 @@ class DE(Optimizer):
             return -problem(designs)
 
         def callback(intermediate_result) -> None:  # scipy dispatches on this name
-            history.record(np.asarray(intermediate_result.population),
-                           -np.asarray(intermediate_result.population_energies), c.population)
+            history.record(
+                np.asarray(intermediate_result.population),
+                -np.asarray(intermediate_result.population_energies),
+                c.population,
+            )
 
-        result = scipy_de(negative, list(zip(problem.lower, problem.upper)), init=init,
-                          maxiter=c.generations, mutation=c.mutation, recombination=c.recombination,
-                          seed=rng, polish=False, vectorized=True, updating="deferred",
-                          callback=callback, tol=0.0, atol=0.0)
-        return OptimizationResult(x=np.asarray(result.x, dtype=float), fun=float(-result.fun),
-                                  history=history.frame(),
-                                  n_evaluations=problem.n_evaluations - start_count, method="de",
-                                  message=str(result.message))
+        result = scipy_de(
+            negative,
+            list(zip(problem.lower, problem.upper)),
+            init=init,
+            maxiter=c.generations,
+            mutation=c.mutation,
+            recombination=c.recombination,
+            seed=rng,
+            polish=False,
+            vectorized=True,
+            updating="deferred",
+            callback=callback,
+            tol=0.0,
+            atol=0.0,
+        )
+        return OptimizationResult(
+            x=np.asarray(result.x, dtype=float),
+            fun=float(-result.fun),
+            history=history.frame(),
+            n_evaluations=problem.n_evaluations - start_count,
+            method="de",
+            message=str(result.message),
+        )

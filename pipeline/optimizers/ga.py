@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pipeline.errors import check, finite
-from pipeline.optimizers.base import check_generations, History, OptimizationResult, Optimizer, OptimizerConfig, Problem
+from pipeline.optimizers.base import History, OptimizationResult, Optimizer, OptimizerConfig, Problem, check_generations
 
 
 @dataclass
@@ -65,15 +65,24 @@ class GAConfig(OptimizerConfig):
     def __post_init__(self) -> None:
         super().__post_init__()
         check_generations(self.population, self.generations, 2)
-        check("optimizer.selection_q", self.selection_q, finite(self.selection_q) and 0 < self.selection_q <= 1,
-              "(0, 1]")
+        check(
+            "optimizer.selection_q", self.selection_q, finite(self.selection_q) and 0 < self.selection_q <= 1, "(0, 1]"
+        )
         for name in ("crossover_rate", "mutation_rate"):
             value = getattr(self, name)
             check(f"optimizer.{name}", value, finite(value) and 0 <= value <= 1, "[0, 1]")
-        check("optimizer.mutation_shape", self.mutation_shape,
-              finite(self.mutation_shape) and 0 < self.mutation_shape <= 100, "(0, 100]")
-        check("optimizer.seed_count", self.seed_count, 1 <= self.seed_count <= 100_000,
-              "an integer in [1, 100000] (at most optimizer.population are used)")
+        check(
+            "optimizer.mutation_shape",
+            self.mutation_shape,
+            finite(self.mutation_shape) and 0 < self.mutation_shape <= 100,
+            "(0, 100]",
+        )
+        check(
+            "optimizer.seed_count",
+            self.seed_count,
+            1 <= self.seed_count <= 100_000,
+            "an integer in [1, 100000] (at most optimizer.population are used)",
+        )
 
 
 class GA(Optimizer):
@@ -88,11 +97,19 @@ class GA(Optimizer):
 
     def run(self, problem: Problem, initial: np.ndarray | None = None) -> OptimizationResult:
         c = self.config
-        return genetic_algorithm(problem, problem.lower, problem.upper, population=c.population,
-                                 generations=c.generations, seed=c.seed, selection_q=c.selection_q,
-                                 crossover_rate=c.crossover_rate, mutation_rate=c.mutation_rate,
-                                 mutation_shape=c.mutation_shape,
-                                 initial=initial if c.seed_from_samples else None)
+        return genetic_algorithm(
+            problem,
+            problem.lower,
+            problem.upper,
+            population=c.population,
+            generations=c.generations,
+            seed=c.seed,
+            selection_q=c.selection_q,
+            crossover_rate=c.crossover_rate,
+            mutation_rate=c.mutation_rate,
+            mutation_shape=c.mutation_shape,
+            initial=initial if c.seed_from_samples else None,
+        )
 
 
 # ------------------------------------------------------------- operators
@@ -116,8 +133,7 @@ def select(rng: np.random.Generator, fitness: np.ndarray, q: float) -> np.ndarra
     return order[np.searchsorted(cumulative, draws, side="right").clip(max=fitness.size - 1)]
 
 
-def arithmetic_crossover(rng: np.random.Generator, pop: np.ndarray, rate: float
-                         ) -> tuple[np.ndarray, np.ndarray]:
+def arithmetic_crossover(rng: np.random.Generator, pop: np.ndarray, rate: float) -> tuple[np.ndarray, np.ndarray]:
     """Cross ``round(rate * P / 2)`` random pairs; returns children and a changed mask."""
     n_pop = pop.shape[0]
     n_pairs = int(round(rate * n_pop / 2))
@@ -134,9 +150,16 @@ def arithmetic_crossover(rng: np.random.Generator, pop: np.ndarray, rate: float
     return out, changed
 
 
-def nonuniform_mutation(rng: np.random.Generator, pop: np.ndarray, lower: np.ndarray,
-                        upper: np.ndarray, rate: float, generation: int, generations: int,
-                        shape: float) -> tuple[np.ndarray, np.ndarray]:
+def nonuniform_mutation(
+    rng: np.random.Generator,
+    pop: np.ndarray,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    rate: float,
+    generation: int,
+    generations: int,
+    shape: float,
+) -> tuple[np.ndarray, np.ndarray]:
     """Non-uniform mutation of one variable per mutated individual; returns children and mask."""
     n_pop, n_var = pop.shape
     mutate = rng.random(n_pop) < rate
@@ -153,11 +176,20 @@ def nonuniform_mutation(rng: np.random.Generator, pop: np.ndarray, lower: np.nda
 
 
 # -------------------------------------------------------------- the GA
-def genetic_algorithm(fitness, lower: np.ndarray, upper: np.ndarray, *,
-                      population: int = 30, generations: int = 150, seed: int = 0,
-                      selection_q: float = 0.08, crossover_rate: float = 0.8,
-                      mutation_rate: float = 0.08, mutation_shape: float = 3.0,
-                      initial: np.ndarray | None = None) -> OptimizationResult:
+def genetic_algorithm(
+    fitness,
+    lower: np.ndarray,
+    upper: np.ndarray,
+    *,
+    population: int = 30,
+    generations: int = 150,
+    seed: int = 0,
+    selection_q: float = 0.08,
+    crossover_rate: float = 0.8,
+    mutation_rate: float = 0.08,
+    mutation_shape: float = 3.0,
+    initial: np.ndarray | None = None,
+) -> OptimizationResult:
     """Maximise ``fitness`` over the box ``[lower, upper]`` with the GAOT operators.
 
     Parameters
@@ -197,8 +229,7 @@ def genetic_algorithm(fitness, lower: np.ndarray, upper: np.ndarray, *,
         chosen = select(rng, fit, selection_q)
         pop, fit = pop[chosen], fit[chosen]
         pop, crossed = arithmetic_crossover(rng, pop, crossover_rate)
-        pop, mutated = nonuniform_mutation(rng, pop, lower, upper, mutation_rate, gen,
-                                           generations, mutation_shape)
+        pop, mutated = nonuniform_mutation(rng, pop, lower, upper, mutation_rate, gen, generations, mutation_shape)
         pop = np.clip(pop, lower, upper)
         changed = crossed | mutated
         fit = fit.copy()
@@ -207,6 +238,11 @@ def genetic_algorithm(fitness, lower: np.ndarray, upper: np.ndarray, *,
         pop[worst], fit[worst] = elite, elite_fit
         history.record(pop, fit, int(changed.sum()))
     best = int(np.argmax(fit))
-    return OptimizationResult(x=pop[best].copy(), fun=float(fit[best]), history=history.frame(),
-                              n_evaluations=problem.n_evaluations - start_count, method="ga",
-                              message=f"{generations} generations of {population}")
+    return OptimizationResult(
+        x=pop[best].copy(),
+        fun=float(fit[best]),
+        history=history.frame(),
+        n_evaluations=problem.n_evaluations - start_count,
+        method="ga",
+        message=f"{generations} generations of {population}",
+    )

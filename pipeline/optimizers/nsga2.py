@@ -19,7 +19,7 @@ import numpy as np
 
 from pipeline.errors import check, finite
 from pipeline.objectives import OBJECTIVES
-from pipeline.optimizers.base import check_generations, History, OptimizationResult, Optimizer, OptimizerConfig, Problem
+from pipeline.optimizers.base import History, OptimizationResult, Optimizer, OptimizerConfig, Problem, check_generations
 
 
 @dataclass
@@ -45,14 +45,21 @@ class NSGA2Config(OptimizerConfig):
         super().__post_init__()
         check_generations(self.population, self.generations, 4)
         names = list(self.objectives)
-        check("optimizer.objectives", names,
-              len(names) == 2 and len(set(names)) == 2 and all(n in OBJECTIVES for n in names),
-              "two different names of " + ", ".join(OBJECTIVES))
+        check(
+            "optimizer.objectives",
+            names,
+            len(names) == 2 and len(set(names)) == 2 and all(n in OBJECTIVES for n in names),
+            "two different names of " + ", ".join(OBJECTIVES),
+        )
         for name in ("eta_crossover", "eta_mutation"):
             value = getattr(self, name)
             check(f"optimizer.{name}", value, finite(value) and 0 < value <= 1000, "(0, 1000]")
-        check("optimizer.crossover_rate", self.crossover_rate,
-              finite(self.crossover_rate) and 0 <= self.crossover_rate <= 1, "[0, 1]")
+        check(
+            "optimizer.crossover_rate",
+            self.crossover_rate,
+            finite(self.crossover_rate) and 0 <= self.crossover_rate <= 1,
+            "[0, 1]",
+        )
 
 
 class NSGA2(Optimizer):
@@ -69,18 +76,31 @@ class NSGA2(Optimizer):
         c = self.config
         start_count = problem.n_evaluations
         history = History(c.generations, "nsga2: ")
-        result = nsga2(problem, problem.lower, problem.upper, population=c.population,
-                       generations=c.generations, seed=c.seed, eta_crossover=c.eta_crossover,
-                       eta_mutation=c.eta_mutation, crossover_rate=c.crossover_rate, history=history)
+        result = nsga2(
+            problem,
+            problem.lower,
+            problem.upper,
+            population=c.population,
+            generations=c.generations,
+            seed=c.seed,
+            eta_crossover=c.eta_crossover,
+            eta_mutation=c.eta_mutation,
+            crossover_rate=c.crossover_rate,
+            history=history,
+        )
         designs, values = result.designs[result.front], result.objectives[result.front]
         order = np.lexsort((values[:, 1], values[:, 0]))  # deterministic row order
         designs, values = designs[order], values[order]
         best = int(np.argmax(values[:, 0]))
-        return OptimizationResult(x=designs[best].copy(), fun=float(values[best, 0]),
-                                  history=history.frame(),
-                                  n_evaluations=problem.n_evaluations - start_count, method="nsga2",
-                                  message=f"{int(result.front.sum())} non-dominated designs",
-                                  front=(designs, values))
+        return OptimizationResult(
+            x=designs[best].copy(),
+            fun=float(values[best, 0]),
+            history=history.frame(),
+            n_evaluations=problem.n_evaluations - start_count,
+            method="nsga2",
+            message=f"{int(result.front.sum())} non-dominated designs",
+            front=(designs, values),
+        )
 
 
 @dataclass
@@ -143,10 +163,19 @@ def _survivors(values: np.ndarray, size: int) -> np.ndarray:
     return np.array(chosen)
 
 
-def nsga2(objectives: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upper: np.ndarray, *,
-          population: int = 40, generations: int = 40, seed: int = 0, eta_crossover: float = 15.0,
-          eta_mutation: float = 20.0, crossover_rate: float = 0.9,
-          history: History | None = None) -> ParetoResult:
+def nsga2(
+    objectives: Callable[[np.ndarray], np.ndarray],
+    lower: np.ndarray,
+    upper: np.ndarray,
+    *,
+    population: int = 40,
+    generations: int = 40,
+    seed: int = 0,
+    eta_crossover: float = 15.0,
+    eta_mutation: float = 20.0,
+    crossover_rate: float = 0.9,
+    history: History | None = None,
+) -> ParetoResult:
     """Maximise the objectives (batch, (P, n) -> (P, m)) over ``[lower, upper]``."""
     lower = np.asarray(lower, dtype=float)
     upper = np.asarray(upper, dtype=float)
@@ -170,19 +199,21 @@ def nsga2(objectives: Callable[[np.ndarray], np.ndarray], lower: np.ndarray, upp
         # simulated binary crossover on consecutive pairs
         kids = parents.copy()
         u = rng.random((population // 2, n_var))
-        beta = np.where(u <= 0.5, (2 * u) ** (1 / (eta_crossover + 1)),
-                        (1 / (2 * (1 - u))) ** (1 / (eta_crossover + 1)))
+        beta = np.where(
+            u <= 0.5, (2 * u) ** (1 / (eta_crossover + 1)), (1 / (2 * (1 - u))) ** (1 / (eta_crossover + 1))
+        )
         cross = rng.random(population // 2) < crossover_rate
-        p1, p2 = parents[0:2 * (population // 2):2], parents[1:2 * (population // 2):2]
+        p1, p2 = parents[0 : 2 * (population // 2) : 2], parents[1 : 2 * (population // 2) : 2]
         c1 = 0.5 * ((1 + beta) * p1 + (1 - beta) * p2)
         c2 = 0.5 * ((1 - beta) * p1 + (1 + beta) * p2)
-        kids[0:2 * (population // 2):2] = np.where(cross[:, None], c1, p1)
-        kids[1:2 * (population // 2):2] = np.where(cross[:, None], c2, p2)
+        kids[0 : 2 * (population // 2) : 2] = np.where(cross[:, None], c1, p1)
+        kids[1 : 2 * (population // 2) : 2] = np.where(cross[:, None], c2, p2)
         # polynomial mutation, probability 1/n_var per variable
         mutate = rng.random(kids.shape) < 1.0 / n_var
         u = rng.random(kids.shape)
-        delta = np.where(u < 0.5, (2 * u) ** (1 / (eta_mutation + 1)) - 1,
-                         1 - (2 * (1 - u)) ** (1 / (eta_mutation + 1)))
+        delta = np.where(
+            u < 0.5, (2 * u) ** (1 / (eta_mutation + 1)) - 1, 1 - (2 * (1 - u)) ** (1 / (eta_mutation + 1))
+        )
         kids = np.where(mutate, kids + delta * (upper - lower), kids)
         kids = np.clip(kids, lower, upper)
         kid_vals = np.asarray(objectives(kids), dtype=float)

@@ -30,8 +30,7 @@ class PolishResult:
     n_evaluations: int
 
 
-def _candidates(x: np.ndarray, lower: np.ndarray, upper: np.ndarray, step: float,
-                snap_fraction: float) -> np.ndarray:
+def _candidates(x: np.ndarray, lower: np.ndarray, upper: np.ndarray, step: float, snap_fraction: float) -> np.ndarray:
     span = upper - lower
     moves = []
     for j in range(x.size):
@@ -51,8 +50,16 @@ def _candidates(x: np.ndarray, lower: np.ndarray, upper: np.ndarray, step: float
     return out[np.any(out != x, axis=1)]
 
 
-def polish(problem: Problem, x0: np.ndarray, f0: float, *, max_evaluations: int = 150,
-           initial_step: float = 0.05, min_step: float = 1e-4, snap_fraction: float = 0.05) -> PolishResult:
+def polish(
+    problem: Problem,
+    x0: np.ndarray,
+    f0: float,
+    *,
+    max_evaluations: int = 150,
+    initial_step: float = 0.05,
+    min_step: float = 1e-4,
+    snap_fraction: float = 0.05,
+) -> PolishResult:
     """Maximise ``problem`` locally from ``x0`` (objective ``f0``) within the box.
 
     Parameters

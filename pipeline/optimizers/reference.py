@@ -70,10 +70,17 @@ class BestKnown:
         return f"{self.found_by} (best of {len(self.searches)} searches; {self.agreeing} agree within 0.1 %)"
 
 
-def best_known(problem: Problem, *, seeds: tuple[int, ...] = REFERENCE_SEEDS,
-               de: tuple[int, int] | None = REFERENCE_DE, grid_points: int = REFERENCE_GRID_POINTS,
-               max_grid: int = REFERENCE_MAX_GRID, grid_polish: int = 3,
-               polish_evaluations: int = REFERENCE_POLISH, agreement: float = 1e-3) -> BestKnown:
+def best_known(
+    problem: Problem,
+    *,
+    seeds: tuple[int, ...] = REFERENCE_SEEDS,
+    de: tuple[int, int] | None = REFERENCE_DE,
+    grid_points: int = REFERENCE_GRID_POINTS,
+    max_grid: int = REFERENCE_MAX_GRID,
+    grid_polish: int = 3,
+    polish_evaluations: int = REFERENCE_POLISH,
+    agreement: float = 1e-3,
+) -> BestKnown:
     """Best of several independent searches of ``problem`` (maximised); see the module docstring.
 
     Parameters
@@ -108,7 +115,7 @@ def best_known(problem: Problem, *, seeds: tuple[int, ...] = REFERENCE_SEEDS,
         since = problem.n_evaluations
         found = DE(DEConfig(seed=0, population=de[0], generations=de[1])).run(problem)
         record(f"de {de[0]}x{de[1]}", found.x, found.fun, since)
-    if grid_points ** problem.n_var <= max_grid:
+    if grid_points**problem.n_var <= max_grid:
         since = problem.n_evaluations
         unit_axes = [np.linspace(0.0, 1.0, grid_points)] * problem.n_var
         unit = np.array(list(itertools.product(*unit_axes)))
@@ -119,11 +126,17 @@ def best_known(problem: Problem, *, seeds: tuple[int, ...] = REFERENCE_SEEDS,
             polished = polish(problem, grid[k], float(values[k]), max_evaluations=polish_evaluations)
             if best is None or polished.fun > best.fun:
                 best = polished
-        searches.append(Search(f"grid {grid_points}^{problem.n_var} + polish", best.fun, best.x,
-                               problem.n_evaluations - since))
+        searches.append(
+            Search(f"grid {grid_points}^{problem.n_var} + polish", best.fun, best.x, problem.n_evaluations - since)
+        )
     top = max(searches, key=lambda s: s.value)  # the first of equals: the order above
     tolerance = agreement * abs(top.value)
     agreeing = sum(top.value - s.value <= tolerance for s in searches)
-    return BestKnown(x=top.x, fun=top.value, found_by=top.method,
-                     n_evaluations=sum(s.n_evaluations for s in searches), agreeing=int(agreeing),
-                     searches=searches)
+    return BestKnown(
+        x=top.x,
+        fun=top.value,
+        found_by=top.method,
+        n_evaluations=sum(s.n_evaluations for s in searches),
+        agreeing=int(agreeing),
+        searches=searches,
+    )

@@ -16,8 +16,16 @@ import numpy as np
 from pipeline.optimizers.base import Problem
 
 
-def flat_intervals(problem: Problem, x: np.ndarray, f: float, names: list[str], *, n_points: int = 9,
-                   local_step: float = 0.01, rtol: float = 1e-9) -> dict[str, float | str]:
+def flat_intervals(
+    problem: Problem,
+    x: np.ndarray,
+    f: float,
+    names: list[str],
+    *,
+    n_points: int = 9,
+    local_step: float = 0.01,
+    rtol: float = 1e-9,
+) -> dict[str, float | str]:
     """Flatness of each design variable at ``x`` (objective ``f``).
 
     Returns
@@ -32,10 +40,14 @@ def flat_intervals(problem: Problem, x: np.ndarray, f: float, names: list[str], 
     span = problem.upper - problem.lower
     probes, owners = [], []
     for j in range(x.size):
-        values = np.unique(np.concatenate([
-            np.linspace(problem.lower[j], problem.upper[j], n_points),
-            np.clip(x[j] + np.array([-1.0, 1.0]) * local_step * span[j], problem.lower[j], problem.upper[j]),
-        ]))
+        values = np.unique(
+            np.concatenate(
+                [
+                    np.linspace(problem.lower[j], problem.upper[j], n_points),
+                    np.clip(x[j] + np.array([-1.0, 1.0]) * local_step * span[j], problem.lower[j], problem.upper[j]),
+                ]
+            )
+        )
         values = values[values != x[j]]
         for v in values:
             c = x.copy()

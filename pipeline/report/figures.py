@@ -52,21 +52,32 @@ def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
             n_seeds = frame["run_id"].nunique()
             label = f"{key[0]}, {key[3]}" + (f", w_d={key[2]:g}" if objective == "mixed" else "")
             label += f" ({n_seeds} seed{'s' if n_seeds > 1 else ''})"
-            line, = ax.plot(stats.index, stats["mean"], label=label)
+            (line,) = ax.plot(stats.index, stats["mean"], label=label)
             ax.fill_between(stats.index, stats["min"], stats["max"], alpha=0.2, color=line.get_color())
-            ref = runs.loc[runs["run_id"].isin(frame["run_id"].unique()), "reference_value"] \
-                if "reference_value" in runs else pd.Series(dtype=float)
+            ref = (
+                runs.loc[runs["run_id"].isin(frame["run_id"].unique()), "reference_value"]
+                if "reference_value" in runs
+                else pd.Series(dtype=float)
+            )
             ref = ref.dropna()
             if len(ref):
                 reference = float(ref.max())
                 gap = 100 * (reference - stats["mean"].iloc[-1]) / abs(reference) if reference else np.nan
-                ax.axhline(reference, ls="--", lw=1, color=line.get_color(),
-                           label=f"reference {reference:.4g} (gap {gap:.2g} %)")
+                ax.axhline(
+                    reference,
+                    ls="--",
+                    lw=1,
+                    color=line.get_color(),
+                    label=f"reference {reference:.4g} (gap {gap:.2g} %)",
+                )
         ax.set_xlabel("generation [1]")
         unit = best.loc[best["objective"].astype(str) == objective, "objective_unit"].iloc[0]
         ax.set_ylabel(f"{symbol(objective)} [{unit}]")
-        ax.set_title(f"convergence of {symbol(objective)}: best per generation\n"
-                     f"(mean and range over distinct seeds; dashed: reference optimum)", fontsize=10)
+        ax.set_title(
+            f"convergence of {symbol(objective)}: best per generation\n"
+            f"(mean and range over distinct seeds; dashed: reference optimum)",
+            fontsize=10,
+        )
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="lower right")
     return png(fig)
@@ -91,8 +102,9 @@ def workspace_gallery(rows: pd.DataFrame, configs: dict[str, dict], kind: str, c
             continue
         mc = _mechanism_config(config)
         mech = mc.build([row[n] for n in mc.design.names])
-        slices.append(workspace_slice(mech, mc.orientation_rad() or mech.default_orientation,
-                                      mc.min_inverse_condition, mc.length))
+        slices.append(
+            workspace_slice(mech, mc.orientation_rad() or mech.default_orientation, mc.min_inverse_condition, mc.length)
+        )
         titles.append(f"{caption(row)}\n{symbol(str(row['objective']))} = {row['objective_value']:.4g}")
     if not slices:
         return ""
@@ -113,7 +125,7 @@ def workspace_gallery(rows: pd.DataFrame, configs: dict[str, dict], kind: str, c
     for ax, data, title in zip(axes, slices, titles):
         mesh = draw_slice(fig, ax, data, kind, vmin=vmin, vmax=vmax, colorbar=False)
         ax.set_title(title, fontsize=8)
-    for ax in axes[len(slices):]:
+    for ax in axes[len(slices) :]:
         ax.set_axis_off()
     label = "1/κ [1]" if kind == "inverse_condition" else slices[0].extent_label
     if mesh is not None and (kind == "inverse_condition" or slices[0].extent is not None):

@@ -76,11 +76,11 @@ def load_sweep(source: Path) -> tuple[pd.DataFrame, pd.DataFrame, dict[str, Path
         frames_history.append(history)
         dirs[manifest["run_id"]] = run
     if not frames_best:
-        raise ConfigError(f"source={str(source)!r} is invalid: no complete run below it; "
-                          f"allowed: a sweep, run or dataset directory")
+        raise ConfigError(
+            f"source={str(source)!r} is invalid: no complete run below it; allowed: a sweep, run or dataset directory"
+        )
     config = (source / "multirun.yaml").read_text() if (source / "multirun.yaml").exists() else ""
-    return (pd.concat(frames_best, ignore_index=True), pd.concat(frames_history, ignore_index=True), dirs,
-            config)
+    return (pd.concat(frames_best, ignore_index=True), pd.concat(frames_history, ignore_index=True), dirs, config)
 
 
 def _img(data: str, alt: str) -> str:
@@ -118,13 +118,33 @@ def _link(path: Path, base: Path) -> str:
 def optima_table(best: pd.DataFrame, dirs: dict[str, Path], base: Path) -> str:
     """The sortable table of the optima, one row per run."""
     designs = design_columns(best)
-    head = ["job", "mechanism", "objective", "w_d", "optimizer", "seed",
-            *[f"{n} [{u}]" for n, u in designs], "objective", "V", "GDI", "SURI", "gap to reference [%]",
-            "flat variables", "at bounds", "files"]
+    head = [
+        "job",
+        "mechanism",
+        "objective",
+        "w_d",
+        "optimizer",
+        "seed",
+        *[f"{n} [{u}]" for n, u in designs],
+        "objective",
+        "V",
+        "GDI",
+        "SURI",
+        "gap to reference [%]",
+        "flat variables",
+        "at bounds",
+        "files",
+    ]
     rows = []
     for _, row in best.iterrows():
-        cells = [_cell(row.get("job")), _cell(row["mechanism"]), _cell(row["objective"]), _cell(row["w_d"]),
-                 _cell(row["optimizer"]), _cell(row["seed"])]
+        cells = [
+            _cell(row.get("job")),
+            _cell(row["mechanism"]),
+            _cell(row["objective"]),
+            _cell(row["w_d"]),
+            _cell(row["optimizer"]),
+            _cell(row["seed"]),
+        ]
         cells += [_cell(row.get(n)) for n, _ in designs]
         unit = row.get("objective_unit", "")
         value = row["objective_value"]
@@ -139,14 +159,18 @@ def optima_table(best: pd.DataFrame, dirs: dict[str, Path], base: Path) -> str:
         cells.append(_cell(label, gap))
         cells += [_cell(row.get("flat_variables", "")), _cell(row.get("at_bounds", ""))]
         run_dir = dirs.get(row["run_id"])
-        links = " ".join(f'<a href="{_link(run_dir / f"{t}.parquet", base)}">{t}</a>'
-                         for t in ("best", "history", "designs", "front")
-                         if run_dir is not None and (run_dir / f"{t}.parquet").exists())
+        links = " ".join(
+            f'<a href="{_link(run_dir / f"{t}.parquet", base)}">{t}</a>'
+            for t in ("best", "history", "designs", "front")
+            if run_dir is not None and (run_dir / f"{t}.parquet").exists()
+        )
         cells.append(f"<td>{links}</td>")
         rows.append(f'<tr title="{html.escape(str(row["run_id"]))}">' + "".join(cells) + "</tr>")
     header = "".join(f"<th>{html.escape(h)}</th>" for h in head)
-    return (f'<div class="scroll"><table id="optima" class="sortable"><thead><tr>{header}</tr></thead>'
-            f"<tbody>{''.join(rows)}</tbody></table></div>")
+    return (
+        f'<div class="scroll"><table id="optima" class="sortable"><thead><tr>{header}</tr></thead>'
+        f"<tbody>{''.join(rows)}</tbody></table></div>"
+    )
 
 
 def seeds_table(best: pd.DataFrame) -> str:
@@ -156,12 +180,13 @@ def seeds_table(best: pd.DataFrame) -> str:
         n_runs, n_seeds = len(frame), frame["seed"].nunique()
         seeds = ", ".join(str(s) for s in sorted(frame["seed"].unique()))
         rows.append("<tr>" + "".join(_cell(v) for v in (*key, n_runs, n_seeds, seeds, n_runs - n_seeds)) + "</tr>")
-    header = "".join(f"<th>{h}</th>" for h in (*GROUP_KEYS, "runs", "distinct seeds", "seeds",
-                                                  "repeats of a seed"))
-    return (f'<div class="scroll"><table class="sortable"><thead><tr>{header}</tr></thead>'
-            f"<tbody>{''.join(rows)}</tbody></table></div>"
-            '<p class="note">Means and ranges are over distinct seeds; a repeat (same study, same seed) '
-            "gives the same result and is counted once.</p>")
+    header = "".join(f"<th>{h}</th>" for h in (*GROUP_KEYS, "runs", "distinct seeds", "seeds", "repeats of a seed"))
+    return (
+        f'<div class="scroll"><table class="sortable"><thead><tr>{header}</tr></thead>'
+        f"<tbody>{''.join(rows)}</tbody></table></div>"
+        '<p class="note">Means and ranges are over distinct seeds; a repeat (same study, same seed) '
+        "gives the same result and is counted once.</p>"
+    )
 
 
 def galleries(best: pd.DataFrame, dirs: dict[str, Path]) -> str:
@@ -176,10 +201,12 @@ def galleries(best: pd.DataFrame, dirs: dict[str, Path]) -> str:
         for kind, alt in (("workspace", "workspace"), ("inverse_condition", "1/κ")):
             data = workspace_gallery(rows, configs, kind)
             if data:
-                parts.append(f"<figure>{_img(data, f'{alt} of the best {name} designs')}"
-                             f"<figcaption>{alt} of the best {name} designs: "
-                             f"{html.escape('; '.join(caption(r) for _, r in rows.iterrows()))}"
-                             f"</figcaption></figure>")
+                parts.append(
+                    f"<figure>{_img(data, f'{alt} of the best {name} designs')}"
+                    f"<figcaption>{alt} of the best {name} designs: "
+                    f"{html.escape('; '.join(caption(r) for _, r in rows.iterrows()))}"
+                    f"</figcaption></figure>"
+                )
     return "".join(parts)
 
 
@@ -196,11 +223,16 @@ def build_report(source: Path, out: Path | None = None) -> str:
     fronts = "".join(
         f"<figure>{_file_img(d / 'pareto.png', 'Pareto front')}<figcaption>"
         f"{html.escape(caption(best[best['run_id'] == rid].iloc[0]))}</figcaption></figure>"
-        for rid, d in dirs.items() if (d / "pareto.png").exists() and (best["run_id"] == rid).any())
+        for rid, d in dirs.items()
+        if (d / "pareto.png").exists() and (best["run_id"] == rid).any()
+    )
     overrides = "".join(
         f"<li>{html.escape(caption(row))}: <code>"
         f"{html.escape(' '.join((read_manifest(dirs[row['run_id']]) or {}).get('overrides', [])) or '(none)')}"
-        f"</code></li>" for _, row in best.iterrows() if row["run_id"] in dirs)
+        f"</code></li>"
+        for _, row in best.iterrows()
+        if row["run_id"] in dirs
+    )
     style = (STATIC / "report.css").read_text()
     script = (STATIC / "report.js").read_text()
     title = html.escape(source.resolve().name)
@@ -214,10 +246,10 @@ def build_report(source: Path, out: Path | None = None) -> str:
 scroll or click a figure to zoom (drag to pan, double-click to reset). Hover a row for its run id.</p>
 <h2>Optima</h2>{optima_table(best, dirs, base)}
 <h2>Runs and seeds</h2>{seeds_table(best)}
-<h2>Trade-off</h2>{tradeoff or '<p>No mixed-index runs.</p>'}
-<h2>Convergence</h2>{_img(convergence_figure(best, history), 'convergence')}
-{'<h2>Pareto fronts</h2><div class="gallery">' + fronts + '</div>' if fronts else ''}
-<h2>Workspaces of the best designs</h2>{galleries(best, dirs) or '<p>No figures (plot.enabled=false).</p>'}
+<h2>Trade-off</h2>{tradeoff or "<p>No mixed-index runs.</p>"}
+<h2>Convergence</h2>{_img(convergence_figure(best, history), "convergence")}
+{'<h2>Pareto fronts</h2><div class="gallery">' + fronts + "</div>" if fronts else ""}
+<h2>Workspaces of the best designs</h2>{galleries(best, dirs) or "<p>No figures (plot.enabled=false).</p>"}
 <h2>Configuration</h2><pre>{html.escape(config)}</pre><ul>{overrides}</ul>
 <script>{script}</script>
 </body></html>

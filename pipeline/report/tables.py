@@ -14,10 +14,12 @@ def rel(ours: float, paper: float) -> str:
 
 def table(header: list[str], rows: list[list]) -> str:
     """A Markdown table; floats with 6 significant digits."""
+
     def fmt(v):
         if isinstance(v, float):
             return f"{v:.6g}"
         return str(v)
+
     lines = ["| " + " | ".join(header) + " |", "| " + " | ".join("---" for _ in header) + " |"]
     lines += ["| " + " | ".join(fmt(v) for v in row) + " |" for row in rows]
     return "\n".join(lines)

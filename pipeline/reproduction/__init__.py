@@ -22,8 +22,11 @@ def write_document(out: Path, output_dir: Path) -> Reproduction:
     # every experiment and the readings study's checks as one batch (the checks and the longest
     # jobs first): two cores stay busy to its very end
     readings = readings_study.plan(r)
-    r.run_experiments([(name, ()) for name in ("tricept_table2", *h4.TABLE_EXPERIMENTS, "h4_fig8", "h4_pareto",
-                                               "mixed_tradeoff")] + readings.requests, readings.tasks)
+    r.run_experiments(
+        [(name, ()) for name in ("tricept_table2", *h4.TABLE_EXPERIMENTS, "h4_fig8", "h4_pareto", "mixed_tradeoff")]
+        + readings.requests,
+        readings.tasks,
+    )
     h4.h4_kinematics(r)
     frames, best_runs = h4.h4_tables(r)
     h4.h4_figures(r, frames, best_runs)

@@ -26,10 +26,15 @@ from pipeline.reproduction.driver import ComputeCounter
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m pipeline.reproduction", description=__doc__.split("\n")[0])
-    parser.add_argument("--out", type=Path, default=Path("outputs/reproduction"),
-                        help="document directory (default outputs/reproduction; --out docs updates the committed one)")
-    parser.add_argument("--output-dir", type=Path, default=Path("outputs"),
-                        help="pipeline outputs and cache (default outputs)")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=Path("outputs/reproduction"),
+        help="document directory (default outputs/reproduction; --out docs updates the committed one)",
+    )
+    parser.add_argument(
+        "--output-dir", type=Path, default=Path("outputs"), help="pipeline outputs and cache (default outputs)"
+    )
     args = parser.parse_args(argv)
     matplotlib.use("Agg")  # a command-line tool: no display; importing this module changes nothing
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")

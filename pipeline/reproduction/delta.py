@@ -19,26 +19,33 @@ import numpy as np
 from kinematics import get_mechanism
 from kinematics.delta import Delta
 from kinematics.workspace import evaluate
-from pipeline.reproduction.driver import Reproduction
 from pipeline.report.tables import rel, table
+from pipeline.reproduction.driver import Reproduction
 
 #: Briot et al. 2008, as printed (m, deg, m³): base and platform radii Rb, Rp, the arm Lb (base
 #: side) and the parallelogram Lp (platform side), the actuator range θ_i ∈ [0°, 90°], the
 #: platform no higher than z = -0.3 m, a 0.02 m grid, and the volume found
-BRIOT_2008 = dict(Rb=0.25, Rp=0.2, Lb=0.75, Lp=0.95, theta_min=0.0, theta_max=90.0, z_max=-0.3, step=0.02,
-                  volume=1.48)
+BRIOT_2008 = dict(Rb=0.25, Rp=0.2, Lb=0.75, Lp=0.95, theta_min=0.0, theta_max=90.0, z_max=-0.3, step=0.02, volume=1.48)
 
 
-def surgiscope(arm: str = "Lb", forearm: str = "Lp", theta_min: float | None = None,
-               theta_max: float | None = None) -> Delta:
+def surgiscope(
+    arm: str = "Lb", forearm: str = "Lp", theta_min: float | None = None, theta_max: float | None = None
+) -> Delta:
     """The Delta of :data:`BRIOT_2008` in mm (our unit), with no forearm ball-joint limit (the
     paper has none); ``arm``/``forearm`` name the printed lengths used for ``la``/``lb``, and the
     actuator range (deg, below the horizontal positive) defaults to the printed one."""
     p = BRIOT_2008
-    return get_mechanism("delta", R=1e3 * p["Rb"], r=1e3 * p["Rp"], la=1e3 * p[arm], lb=1e3 * p[forearm],
-                         theta_min=p["theta_min"] if theta_min is None else theta_min,
-                         theta_max=p["theta_max"] if theta_max is None else theta_max,
-                         passive_limit=90.0, z_max=1e3 * p["z_max"])
+    return get_mechanism(
+        "delta",
+        R=1e3 * p["Rb"],
+        r=1e3 * p["Rp"],
+        la=1e3 * p[arm],
+        lb=1e3 * p[forearm],
+        theta_min=p["theta_min"] if theta_min is None else theta_min,
+        theta_max=p["theta_max"] if theta_max is None else theta_max,
+        passive_limit=90.0,
+        z_max=1e3 * p["z_max"],
+    )
 
 
 def paper_grid_volume(offset: float) -> float:
@@ -61,8 +68,13 @@ def paper_grid_volume(offset: float) -> float:
     return count * BRIOT_2008["step"] ** 3
 
 
-def surgiscope_evaluation(resolution: int, arm: str = "Lb", forearm: str = "Lp", theta_min: float | None = None,
-                          theta_max: float | None = None) -> tuple[float, float, float]:
+def surgiscope_evaluation(
+    resolution: int,
+    arm: str = "Lb",
+    forearm: str = "Lp",
+    theta_min: float | None = None,
+    theta_max: float | None = None,
+) -> tuple[float, float, float]:
     """Volume (m³), its half-cell-shift error (m³) and GDI of :func:`surgiscope` by the pipeline's
     evaluator at ``resolution``, with no dexterity limit (the paper's workspace is geometric)."""
     ev = evaluate(surgiscope(arm, forearm, theta_min, theta_max), resolution=resolution, min_inverse_condition=0.0)
@@ -71,8 +83,14 @@ def surgiscope_evaluation(resolution: int, arm: str = "Lb", forearm: str = "Lp",
 
 def section_png(resolution: int = 200) -> dict[str, bytes]:
     """The workspace's vertical section y = 0 (m), coloured by 1/κ: ``{file name: PNG bytes}``."""
-    ev = evaluate(surgiscope(), resolution=resolution, min_inverse_condition=0.0, fixed={"y": 0.0},
-                  return_samples=True, error_estimate=False)
+    ev = evaluate(
+        surgiscope(),
+        resolution=resolution,
+        min_inverse_condition=0.0,
+        fixed={"y": 0.0},
+        return_samples=True,
+        error_estimate=False,
+    )
     ic = np.where(ev.inside, ev.inverse_conditions, np.nan).reshape(resolution, resolution)
     x = ev.samples[::resolution, 0] / 1e3  # C order over (x, z): x varies slowest
     z = ev.samples[:resolution, 2] / 1e3
@@ -94,19 +112,28 @@ def delta(r: Reproduction) -> None:
     p = BRIOT_2008
     offsets = (0.0, 5.0, 10.0)
     grid = dict(zip(offsets, r.memo_map(paper_grid_volume, [(o,) for o in offsets])))
-    readings = {"arm and parallelogram swapped (la = Lp, lb = Lb)": (128, "Lp", "Lb"),
-                "θ measured upwards (arm above the horizontal)": (128, "Lb", "Lp", -90.0, 0.0),
-                "no actuator limit": (128, "Lb", "Lp", -179.9, 179.9)}
+    readings = {
+        "arm and parallelogram swapped (la = Lp, lb = Lb)": (128, "Lp", "Lb"),
+        "θ measured upwards (arm above the horizontal)": (128, "Lb", "Lp", -90.0, 0.0),
+        "no actuator limit": (128, "Lb", "Lp", -179.9, 179.9),
+    }
     resolutions = (128, 192)
     values = r.memo_map(surgiscope_evaluation, [(res,) for res in resolutions] + list(readings.values()))
     evaluations = dict(zip(resolutions, values))
-    other = {label: v[0] for label, v in zip(readings, values[len(resolutions):])}
+    other = {label: v[0] for label, v in zip(readings, values[len(resolutions) :])}
     fine = evaluations[192]
-    rows = [[f"paper's method: {1e3 * p['step']:.0f} mm grid from x, y = {o:g} mm", round(v, 4), rel(v, p["volume"])]
-            for o, v in grid.items()]
-    rows += [[f"evaluator, resolution {res} (midpoint grid; ± its half-cell shift)",
-              f"{volume:.4f} ± {error:.4f}", rel(volume, p["volume"])]
-             for res, (volume, error, _) in evaluations.items()]
+    rows = [
+        [f"paper's method: {1e3 * p['step']:.0f} mm grid from x, y = {o:g} mm", round(v, 4), rel(v, p["volume"])]
+        for o, v in grid.items()
+    ]
+    rows += [
+        [
+            f"evaluator, resolution {res} (midpoint grid; ± its half-cell shift)",
+            f"{volume:.4f} ± {error:.4f}",
+            rel(volume, p["volume"]),
+        ]
+        for res, (volume, error, _) in evaluations.items()
+    ]
     rows += [[f"other reading: {label}", round(v, 4), rel(v, p["volume"])] for label, v in other.items()]
     r.cached_figures(section_png)
     r.add(f"""

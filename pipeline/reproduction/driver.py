@@ -26,9 +26,9 @@ from hydra.core.override_parser.overrides_parser import OverridesParser
 from joblib import Parallel, delayed
 from omegaconf import DictConfig, OmegaConf, open_dict
 
+from pipeline.config import CONFIG_DIR, register_configs
 from pipeline.stages.aggregate import aggregate
 from pipeline.store.cache import cached
-from pipeline.config import CONFIG_DIR, register_configs
 from pipeline.store.runs import launch_id, read_manifest
 from pipeline.study import run_study
 from pipeline.sweeps import jobs as sweeps
@@ -72,8 +72,9 @@ def _worker_ready() -> None:
     """
 
 
-def _run_counted(base: DictConfig, values: list[str], run_dir: Path, job: int, overrides: list[str]
-                 ) -> tuple[dict[str, Path], int]:
+def _run_counted(
+    base: DictConfig, values: list[str], run_dir: Path, job: int, overrides: list[str]
+) -> tuple[dict[str, Path], int]:
     """``run_study`` of ``base`` with ``values`` (in a worker: ``base`` is its own copy), and the
     number of stages it computed."""
     counter = ComputeCounter()
@@ -129,8 +130,9 @@ class Reproduction:
         # joblib's workers start now, in the background: their start-up (~1.5 s of imports)
         # then overlaps the composing of the first batch instead of following it (the batch's
         # Parallel call reuses them: joblib keeps one reusable pool)
-        self._warm = threading.Thread(target=lambda: Parallel(n_jobs=STUDY_JOBS)(
-            delayed(_worker_ready)() for _ in range(STUDY_JOBS)), daemon=True)
+        self._warm = threading.Thread(
+            target=lambda: Parallel(n_jobs=STUDY_JOBS)(delayed(_worker_ready)() for _ in range(STUDY_JOBS)), daemon=True
+        )
         self._warm.start()
 
     # ------------------------------------------------------------ experiments
@@ -150,8 +152,13 @@ class Reproduction:
             if label in self._ran or any(label == p[0] for p in planned):
                 continue
             sweep_dir = self.runs_dir / label
-            planned.append((label, jobs, [(sweep_dir / str(k), [f"+experiment={name}", *extra, *job])
-                                          for k, job in enumerate(jobs)]))
+            planned.append(
+                (
+                    label,
+                    jobs,
+                    [(sweep_dir / str(k), [f"+experiment={name}", *extra, *job]) for k, job in enumerate(jobs)],
+                )
+            )
         if not planned:
             self._run_tasks(list(alongside))
             return
@@ -243,18 +250,23 @@ class Reproduction:
         run first in the same batch.
         """
         side_by_side = min(STUDY_JOBS, len(specs) + len(alongside))
-        common = [f"paths.output_dir={self.output_dir}", "plot.enabled=false",
-                  f"parallel.n_jobs={2 if side_by_side == 1 else 1}"]
+        common = [
+            f"paths.output_dir={self.output_dir}",
+            "plot.enabled=false",
+            f"parallel.n_jobs={2 if side_by_side == 1 else 1}",
+        ]
         if side_by_side == 1:
             self._run_tasks(list(alongside))
-            done = [(run_study(self.compose([*o, *common]), d, k, o), 0)  # counted by main's handler
-                    for k, (d, o) in enumerate(specs)]
+            done = [
+                (run_study(self.compose([*o, *common]), d, k, o), 0)  # counted by main's handler
+                for k, (d, o) in enumerate(specs)
+            ]
         else:
             tasks = []
             for k, (run_dir, overrides) in enumerate(specs):
                 groups, values = _split([*overrides, *common])
                 tasks.append(delayed(_run_counted)(self._base(groups), values, run_dir, k, overrides))
-            done = self._run_tasks([*alongside, *tasks])[len(alongside):]
+            done = self._run_tasks([*alongside, *tasks])[len(alongside) :]
         self.computed += sum(computed for _, computed in done)
         return [run_dir for run_dir, _ in specs]
 

@@ -13,8 +13,8 @@ import pandas as pd
 
 from kinematics import get_mechanism
 from kinematics.workspace import evaluate
-from pipeline.reproduction.driver import Reproduction
 from pipeline.report.tables import table
+from pipeline.reproduction.driver import Reproduction
 
 
 def extensions(r: Reproduction, h4_sweep_table: pd.DataFrame, best_runs: dict[str, pd.Series]) -> None:
@@ -32,8 +32,11 @@ def extensions(r: Reproduction, h4_sweep_table: pd.DataFrame, best_runs: dict[st
         ax.grid(alpha=0.3)
     fig.savefig(r.figures / "ext_tradeoff.png", dpi=90, bbox_inches="tight")
     plt.close(fig)
-    ext_rows = [[name, f"{row['w_d']:.2f}", row["gdi"], row["suri"], row["objective_value"]]
-                for name, frame in panels.items() for _, row in frame.iterrows()]
+    ext_rows = [
+        [name, f"{row['w_d']:.2f}", row["gdi"], row["suri"], row["objective_value"]]
+        for name, frame in panels.items()
+        for _, row in frame.iterrows()
+    ]
 
     # Pareto front of (GDI, SURI) for H4 by NSGA-II, against the weighted-sum optima
     pareto_run = r.experiment("h4_pareto")
@@ -64,8 +67,9 @@ def extensions(r: Reproduction, h4_sweep_table: pd.DataFrame, best_runs: dict[st
         for factor in (0.25, 0.5, 1.0, 2.0, 4.0):
             length = factor * mech.characteristic_length
             ev = r.memo(evaluate)(mech, length=length, error_estimate=False)
-            sens_rows.append([label, f"{factor:g} × {mech.characteristic_length:.3g} = {length:.3g}",
-                              ev.gdi, ev.volume])
+            sens_rows.append(
+                [label, f"{factor:g} × {mech.characteristic_length:.3g} = {length:.3g}", ev.gdi, ev.volume]
+            )
 
     spans = []
     for label in dict.fromkeys(row[0] for row in sens_rows):
@@ -78,9 +82,18 @@ def extensions(r: Reproduction, h4_sweep_table: pd.DataFrame, best_runs: dict[st
         return row[f"{name}_refined"] / row[name] - 1 if row[name] else 0.0
 
     optima = pd.concat(r.runs, ignore_index=True)
-    refined = [[row["study"], row["volume"], row["volume_refined"], f"{100 * change(row, 'volume'):+.2f} %",
-                row["gdi"], row["gdi_refined"], f"{100 * change(row, 'gdi'):+.2f} %"]
-               for _, row in optima.iterrows()]
+    refined = [
+        [
+            row["study"],
+            row["volume"],
+            row["volume_refined"],
+            f"{100 * change(row, 'volume'):+.2f} %",
+            row["gdi"],
+            row["gdi_refined"],
+            f"{100 * change(row, 'gdi'):+.2f} %",
+        ]
+        for _, row in optima.iterrows()
+    ]
     worst_v = max(abs(change(row, "volume")) for _, row in optima.iterrows())
     worst_g = max(abs(change(row, "gdi")) for _, row in optima.iterrows())
     r.add(f"""

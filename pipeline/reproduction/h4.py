@@ -17,10 +17,10 @@ import pandas as pd
 
 from kinematics import MECHANISMS, get_mechanism
 from kinematics.workspace import evaluate
-from pipeline.stages.plot import plot_convergence, plot_workspace
-from pipeline.reproduction.readings import H4_PAPER
-from pipeline.reproduction.driver import Reproduction
 from pipeline.report.tables import rel, table
+from pipeline.reproduction.driver import Reproduction
+from pipeline.reproduction.readings import H4_PAPER
+from pipeline.stages.plot import plot_convergence, plot_workspace
 
 #: the experiments of Tables 1-3 (h4_table3 sweeps w_d as well as the seeds)
 TABLE_EXPERIMENTS = ("h4_table1", "h4_table2", "h4_table3")
@@ -39,14 +39,23 @@ def bound_positions(row: pd.Series, mechanism: str) -> str:
     for var in MECHANISMS[mechanism].design_variables:
         value = float(row[var.name])
         if var.name in flat:
-            parts.append(f"{var.name} anywhere in [{row[f'{var.name}_flat_lower']:.4g}, "
-                         f"{row[f'{var.name}_flat_upper']:.4g}] (flat: no effect there)")
+            parts.append(
+                f"{var.name} anywhere in [{row[f'{var.name}_flat_lower']:.4g}, "
+                f"{row[f'{var.name}_flat_upper']:.4g}] (flat: no effect there)"
+            )
             continue
         frac = (value - var.lower) / (var.upper - var.lower)
-        where = ("on its lower bound" if f"{var.name}=lower" in on_bounds else
-                 "on its upper bound" if f"{var.name}=upper" in on_bounds else
-                 "near its lower bound" if frac < 0.02 else "near its upper bound" if frac > 0.98 else
-                 f"{100 * frac:.0f} % of range")
+        where = (
+            "on its lower bound"
+            if f"{var.name}=lower" in on_bounds
+            else "on its upper bound"
+            if f"{var.name}=upper" in on_bounds
+            else "near its lower bound"
+            if frac < 0.02
+            else "near its upper bound"
+            if frac > 0.98
+            else f"{100 * frac:.0f} % of range"
+        )
         parts.append(f"{var.name} = {value:.4g} ({where})")
     return ", ".join(parts)
 
@@ -86,7 +95,6 @@ example; each of our three readings of how they follow the design (`mechanism.fi
 """)
 
 
-
 def h4_table_runs(r: Reproduction, extra: tuple[str, ...] = ()) -> dict[str, pd.DataFrame]:
     """The best rows of Tables 1-3 (experiments ``h4_table1/2/3``), one frame per printed table row.
 
@@ -107,9 +115,16 @@ def gap_rows(frames: dict[str, pd.DataFrame]) -> list[list]:
     """The paper GA against the reference optimum (IPOP-CMA-ES + polish), per study."""
     rows = []
     for label, frame in frames.items():
-        rows.append([label, f"{frame['objective_value'].mean():.6g}", f"{frame['reference_value'].max():.6g}",
-                     f"{100 * frame['reference_gap'].mean():.2f} %", f"{100 * frame['reference_gap'].max():.2f} %",
-                     ", ".join(sorted(set(";".join(frame["at_bounds"]).split(";")) - {""})) or "none"])
+        rows.append(
+            [
+                label,
+                f"{frame['objective_value'].mean():.6g}",
+                f"{frame['reference_value'].max():.6g}",
+                f"{100 * frame['reference_gap'].mean():.2f} %",
+                f"{100 * frame['reference_gap'].max():.2f} %",
+                ", ".join(sorted(set(";".join(frame["at_bounds"]).split(";")) - {""})) or "none",
+            ]
+        )
     return rows
 
 
@@ -121,18 +136,35 @@ def h4_tables(r: Reproduction) -> tuple[dict[str, pd.DataFrame], dict[str, pd.Se
     for label, frame in frames.items():
         best_runs[label] = frame.iloc[int(np.argmax(frame["objective_value"]))]
         p = H4_PAPER[label]
-        for key, column in (("V", "volume"), ("gdi", "gdi"), ("d", "param_d_cm"), ("h", "param_h_cm"),
-                            ("Qz", "param_Qz_cm")):
+        for key, column in (
+            ("V", "volume"),
+            ("gdi", "gdi"),
+            ("d", "param_d_cm"),
+            ("h", "param_h_cm"),
+            ("Qz", "param_Qz_cm"),
+        ):
             vals = frame[column].to_numpy()
-            rows.append([label, "ic" if key == "gdi" else key, p[key], f"{vals.mean():.4g} ± {vals.std():.2g}",
-                         rel(vals.mean(), p[key])])
+            rows.append(
+                [
+                    label,
+                    "ic" if key == "gdi" else key,
+                    p[key],
+                    f"{vals.mean():.4g} ± {vals.std():.2g}",
+                    rel(vals.mean(), p[key]),
+                ]
+            )
     paper_design = get_mechanism("h4", **{k: H4_PAPER["Table 1 (max V)"][k] for k in ("d", "h", "Qz")})
     ev_paper = r.memo(evaluate)(paper_design)
     table2 = get_mechanism("h4", **{k: H4_PAPER["Table 2 (max GDI)"][k] for k in ("d", "h", "Qz")})
-    length_effect = [[f"{label} = {length:.3g} cm", round(ev.volume, 1), round(ev.gdi, 4)]
-                     for label, length in (("h (our default)", table2.h), ("sqrt(3) Qz (a rod)", 3**0.5 * table2.Qz),
-                                           ("100 cm", 100.0))
-                     for ev in [r.memo(evaluate)(table2, length=length, error_estimate=False)]]
+    length_effect = [
+        [f"{label} = {length:.3g} cm", round(ev.volume, 1), round(ev.gdi, 4)]
+        for label, length in (
+            ("h (our default)", table2.h),
+            ("sqrt(3) Qz (a rod)", 3**0.5 * table2.Qz),
+            ("100 cm", 100.0),
+        )
+        for ev in [r.memo(evaluate)(table2, length=length, error_estimate=False)]
+    ]
     positions = [[label, bound_positions(row, "h4")] for label, row in best_runs.items()]
     r.add(f"""
 ### Tables 1-3: optima of V, GDI and the mixed index (30 × 150 GA, seeds {list(SEEDS)})
@@ -179,21 +211,36 @@ def workspace_pngs(d: float, h: float, Qz: float, volume: float) -> dict[str, by
     1/κ > 0.01)."""
     mech = get_mechanism("h4", d=d, h=h, Qz=Qz)
     with tempfile.TemporaryDirectory() as tmp:
-        plot_workspace(mech, mech.default_orientation, 0.01, None, Path(tmp), "H4, max V (Table 1 optimum)",
-                       design_volume=f"design's V = {volume:.6g} {mech.volume_unit()}")
-        return {"h4_fig5_workspace.png": (Path(tmp) / "workspace.png").read_bytes(),
-                "h4_fig6_inverse_condition.png": (Path(tmp) / "inverse_condition.png").read_bytes()}
+        plot_workspace(
+            mech,
+            mech.default_orientation,
+            0.01,
+            None,
+            Path(tmp),
+            "H4, max V (Table 1 optimum)",
+            design_volume=f"design's V = {volume:.6g} {mech.volume_unit()}",
+        )
+        return {
+            "h4_fig5_workspace.png": (Path(tmp) / "workspace.png").read_bytes(),
+            "h4_fig6_inverse_condition.png": (Path(tmp) / "inverse_condition.png").read_bytes(),
+        }
 
 
 def h4_figures(r: Reproduction, frames: dict[str, pd.DataFrame], best_runs: dict[str, pd.Series]) -> None:
     """Section "Fig. 5-7": Table 1's best optimum's workspace, and the GA history of its seed 0."""
     b = best_runs["Table 1 (max V)"]
-    r.cached_figures(workspace_pngs, float(b["param_d_cm"]), float(b["param_h_cm"]), float(b["param_Qz_cm"]),
-                      float(b["volume"]))
+    r.cached_figures(
+        workspace_pngs, float(b["param_d_cm"]), float(b["param_h_cm"]), float(b["param_Qz_cm"]), float(b["volume"])
+    )
     history = r.table("history", [frames["Table 1 (max V)"]["run_id"].iloc[0]])
     first = frames["Table 1 (max V)"].iloc[0]
-    plot_convergence(history, r.figures / "h4_fig7_convergence.png", "paper GA convergence (H4, max V, seed 0)",
-                     "V [cm³·rad]", reference=float(first["reference_value"]))
+    plot_convergence(
+        history,
+        r.figures / "h4_fig7_convergence.png",
+        "paper GA convergence (H4, max V, seed 0)",
+        "V [cm³·rad]",
+        reference=float(first["reference_value"]),
+    )
     r.add(f"""
 ### Fig. 5-7
 
@@ -230,20 +277,26 @@ def h4_sweep(r: Reproduction) -> pd.DataFrame:
     v0 = float(sweep["volume"].iloc[0])
     collapsed = sweep[sweep["volume"] < 0.5 * v0]
     first = float(collapsed["w_d"].min()) if len(collapsed) else None
-    rows_t = [[f"{w:.2f}", g, s, e, v] for w, g, s, e, v in
-              zip(sweep["w_d"], sweep["gdi"], sweep["suri"], sweep["objective_value"], sweep["volume"])]
+    rows_t = [
+        [f"{w:.2f}", g, s, e, v]
+        for w, g, s, e, v in zip(sweep["w_d"], sweep["gdi"], sweep["suri"], sweep["objective_value"], sweep["volume"])
+    ]
     volume = sweep["volume"].to_numpy()
     jump = int(np.argmax(np.abs(np.diff(volume))))
     w_a, w_b = float(sweep["w_d"].iloc[jump]), float(sweep["w_d"].iloc[jump + 1])
     qz_a, qz_b = (float(sweep["Qz_ratio"].iloc[k]) for k in (jump, jump + 1))
-    claim = (f"in our model the optimum's volume first falls below half of its w_d = 0 value at "
-             f"w_d = {first:.2f}" if first is not None else
-             "in our model the optimum's volume never falls below half of its w_d = 0 value, so the "
-             "claim is refuted for this model")
-    claim += (f". The largest change of the optimum along the sweep is between w_d = {w_a:.2f} and "
-              f"{w_b:.2f}, where V goes from {volume[jump]:.0f} to {volume[jump + 1]:.0f} cm³·rad "
-              f"(Qz/Δq from {qz_a:.3f} to {qz_b:.3f}): the weighted sum switches from one family of "
-              f"designs to another instead of moving smoothly")
+    claim = (
+        f"in our model the optimum's volume first falls below half of its w_d = 0 value at w_d = {first:.2f}"
+        if first is not None
+        else "in our model the optimum's volume never falls below half of its w_d = 0 value, so the "
+        "claim is refuted for this model"
+    )
+    claim += (
+        f". The largest change of the optimum along the sweep is between w_d = {w_a:.2f} and "
+        f"{w_b:.2f}, where V goes from {volume[jump]:.0f} to {volume[jump + 1]:.0f} cm³·rad "
+        f"(Qz/Δq from {qz_a:.3f} to {qz_b:.3f}): the weighted sum switches from one family of "
+        f"designs to another instead of moving smoothly"
+    )
     r.add(f"""
 ### Fig. 8: GDI, SURI and η versus w_d (w_d = 0, 0.05, ..., 1; GA 30 × 150, seed 0)
 

@@ -26,8 +26,8 @@ import numpy as np
 import pandas as pd
 
 from pipeline.errors import ConfigError
-from pipeline.reproduction.papers import load_paper, paper_names
 from pipeline.report.tables import rel, table
+from pipeline.reproduction.papers import load_paper, paper_names
 from pipeline.store.parquet import PARAM_UNITS
 
 #: printed quantity -> dataset column (design quantities: :func:`_design_column`)
@@ -47,8 +47,14 @@ def _design_column(best: pd.DataFrame, name: str) -> str:
     parameter ``param_<name>_<unit>`` (the paper's unit: H4 cm, Tricept mm; pipeline.store.parquet)."""
     if name in best.columns:
         return name
-    return next((c for c in best.columns if c == f"param_{name}" or
-                 (c.startswith(f"param_{name}_") and c[len(f"param_{name}_"):] in PARAM_UNITS)), f"param_{name}")
+    return next(
+        (
+            c
+            for c in best.columns
+            if c == f"param_{name}" or (c.startswith(f"param_{name}_") and c[len(f"param_{name}_") :] in PARAM_UNITS)
+        ),
+        f"param_{name}",
+    )
 
 
 def compare(best: pd.DataFrame, paper: dict) -> list[list]:
@@ -68,8 +74,10 @@ def compare(best: pd.DataFrame, paper: dict) -> list[list]:
         if runs.empty:
             out.append([row["table"], "-", 0, "-", "-", "no runs in the dataset", "-"])
             continue
-        quantities = {**QUANTITIES, **{k: _design_column(best, k) for k in row
-                                       if k not in (*QUANTITIES, "table", "objective", "w_d")}}
+        quantities = {
+            **QUANTITIES,
+            **{k: _design_column(best, k) for k in row if k not in (*QUANTITIES, "table", "objective", "w_d")},
+        }
         for optimizer, group in runs.groupby("optimizer", sort=True):
             for key, column in quantities.items():
                 if key not in row or column not in group:  # not printed for this row, or not in our runs
@@ -87,18 +95,24 @@ def report(dataset: Path, paper_name: str) -> str:
     paper = load_paper(paper_name)
     dataset = Path(dataset)
     if not (dataset / "best").is_dir():
-        raise ConfigError(f"dataset={str(dataset)!r} is invalid: allowed a dataset directory "
-                          f"(holding best/, written by aggregation)")
+        raise ConfigError(
+            f"dataset={str(dataset)!r} is invalid: allowed a dataset directory (holding best/, written by aggregation)"
+        )
     best = pd.read_parquet(dataset / "best")
     rows = compare(best, paper)
-    return (f"# {paper_name}: the paper's tables beside {dataset}\n\n"
-            f"Ours: mean ± standard deviation over the runs of each objective and optimiser. "
-            f"What the paper's numbers mean: `pipeline/reproduction/papers/{paper_name}.yaml`.\n\n"
-            + table(["table", "optimiser", "runs", "quantity", "paper", "ours", "difference"], rows) + "\n")
+    return (
+        f"# {paper_name}: the paper's tables beside {dataset}\n\n"
+        f"Ours: mean ± standard deviation over the runs of each objective and optimiser. "
+        f"What the paper's numbers mean: `pipeline/reproduction/papers/{paper_name}.yaml`.\n\n"
+        + table(["table", "optimiser", "runs", "quantity", "paper", "ours", "difference"], rows)
+        + "\n"
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m pipeline.reproduction.paper_report", description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m pipeline.reproduction.paper_report", description=__doc__.split("\n")[0]
+    )
     parser.add_argument("dataset", type=Path, help="dataset directory (e.g. outputs/dataset)")
     parser.add_argument("--paper", required=True, help=f"one of {', '.join(paper_names())}")
     parser.add_argument("--out", type=Path, help="write the Markdown here instead of printing it")

@@ -25,7 +25,6 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -34,7 +33,6 @@ from scipy.stats import spearmanr
 
 from kinematics import get_mechanism
 from kinematics.workspace import evaluate
-from pipeline.store.cache import cached
 from pipeline.config import CONFIG_DIR, MechanismConfig, SampleConfig
 from pipeline.evaluation import DesignEvaluator
 from pipeline.objectives import objective_values
@@ -42,21 +40,28 @@ from pipeline.optimizers import reference_optimum
 from pipeline.optimizers.base import Problem
 from pipeline.reproduction.papers import load_paper
 from pipeline.stages.sample import sample_designs
+from pipeline.store.cache import cached
 
 #: seed 000 Tables 1-3: V (cm³ as printed), GDI, and the design (cm), from pipeline/reproduction/papers/seed000_h4.yaml
-H4_PAPER = {row["table"]: {k: row[k] for k in ("V", "gdi", "d", "h", "Qz")}
-            for row in load_paper("seed000_h4")["rows"]}
+H4_PAPER = {row["table"]: {k: row[k] for k in ("V", "gdi", "d", "h", "Qz")} for row in load_paper("seed000_h4")["rows"]}
 #: Table 2's V = 4.1887 is 4π/3 to five digits: a floor of the paper's volume routine, not a volume
 H4_DEGENERATE_V = ("Table 2 (max GDI)",)
 #: seed 001 Table 2: V (mm·rad²), the LCI range and the design (a and b swapped back into their bounds),
 #: from pipeline/reproduction/papers/seed001_tricept.yaml
-TRICEPT_PAPER = {k: v for k, v in load_paper("seed001_tricept")["rows"][0].items()
-                 if k in ("V", "lci_min", "lci_max", "a", "b", "d")}
+TRICEPT_PAPER = {
+    k: v for k, v in load_paper("seed001_tricept")["rows"][0].items() if k in ("V", "lci_min", "lci_max", "a", "b", "d")
+}
 
-H4_READINGS = dict(base=("scaled", "tracking", "fixed"), homogenising=("h", "d", "rod", "none"),
-                   theta=(45.0, 30.0, 15.0, 0.0))
-TRICEPT_READINGS = dict(cone_joints=("both", "base", "none"), cone_reference=("normal", "home"),
-                        offset_side=(1, -1), tilt_limit=(None, 30.0, 45.0), homogenising=("arm", "a"))
+H4_READINGS = dict(
+    base=("scaled", "tracking", "fixed"), homogenising=("h", "d", "rod", "none"), theta=(45.0, 30.0, 15.0, 0.0)
+)
+TRICEPT_READINGS = dict(
+    cone_joints=("both", "base", "none"),
+    cone_reference=("normal", "home"),
+    offset_side=(1, -1),
+    tilt_limit=(None, 30.0, 45.0),
+    homogenising=("arm", "a"),
+)
 
 
 @dataclass(frozen=True)
@@ -107,8 +112,10 @@ def h4_table(readings: list[Reading]) -> pd.DataFrame:
                 errors.append(_log_error(ev.volume, p["V"]))
             errors.append(_log_error(ev.gdi, p["gdi"]))
         row["score"] = float(np.mean(errors))
-        gdis = [row[f"{n} GDI"] for n in ("Table 1 (max V)", "Table 3 (w_d = 0.25)", "Table 3 (w_d = 0.5)",
-                                          "Table 3 (w_d = 0.75)")]
+        gdis = [
+            row[f"{n} GDI"]
+            for n in ("Table 1 (max V)", "Table 3 (w_d = 0.25)", "Table 3 (w_d = 0.5)", "Table 3 (w_d = 0.75)")
+        ]
         row["paper's GDI order"] = bool(all(a < b for a, b in zip(gdis, gdis[1:])))
         rows.append(row)
     return pd.DataFrame(rows).sort_values("score", kind="stable").reset_index(drop=True)
@@ -119,8 +126,11 @@ def _optimum(mechanism: MechanismConfig, objective: str, w_d: float, seed: int =
     of one objective (cached). Evaluated in-process: the reproduction runs the checks that call
     it side by side on its workers (a pool per check inside them only added overhead)."""
     evaluator = DesignEvaluator(mechanism, None, 1)
-    problem = Problem(lambda x: objective_values(objective, evaluator.evaluate(x), w_d),
-                      mechanism.design.lower, mechanism.design.upper)
+    problem = Problem(
+        lambda x: objective_values(objective, evaluator.evaluate(x), w_d),
+        mechanism.design.lower,
+        mechanism.design.upper,
+    )
     best = reference_optimum(problem, seed)
     return best.x, best.fun
 
@@ -130,8 +140,12 @@ def _values(mechanism: MechanismConfig, designs: np.ndarray) -> pd.DataFrame:
     return pd.DataFrame({"V": rows[:, 0], "GDI": rows[:, 1], "SURI": rows[:, 4]})
 
 
-def check_reading(reading: Reading, paper_designs: dict[str, np.ndarray], cache_dir: str,
-                  sweep: tuple[float, ...] = (0.0, 0.25, 0.5, 0.75, 1.0)) -> dict:
+def check_reading(
+    reading: Reading,
+    paper_designs: dict[str, np.ndarray],
+    cache_dir: str,
+    sweep: tuple[float, ...] = (0.0, 0.25, 0.5, 0.75, 1.0),
+) -> dict:
     """Optimality of the paper's designs, the V-GDI conflict and the w_d collapse under ``reading``."""
     mech = reading.config()
     optimum = cached(_optimum, cache_dir)
@@ -147,8 +161,9 @@ def check_reading(reading: Reading, paper_designs: dict[str, np.ndarray], cache_
     samples = sample_designs(mech.design, SampleConfig(n=64, seed=0))[mech.design.names].to_numpy()
     table = _values(mech, samples)
     inside = table["V"] > 0
-    out["spearman V-GDI"] = float(spearmanr(table["V"][inside], table["GDI"][inside]).statistic) \
-        if inside.sum() > 2 else float("nan")
+    out["spearman V-GDI"] = (
+        float(spearmanr(table["V"][inside], table["GDI"][inside]).statistic) if inside.sum() > 2 else float("nan")
+    )
     at_max_v = _values(mech, out["max V design"][None]).iloc[0]
     out["GDI at max-V / max GDI"] = at_max_v["GDI"] / out["max GDI optimum"] if out["max GDI optimum"] else np.nan
     volumes = []
@@ -169,8 +184,9 @@ def reading_preset(reading: Reading) -> str | None:
         mech = data.get("mechanism", {})
         if mech.get("orientation") is None:
             continue
-        if (mech.get("fixed", {}) == dict(reading.fixed)
-                and tuple(float(v) for v in mech["orientation"]) == tuple(reading.orientation)):
+        if mech.get("fixed", {}) == dict(reading.fixed) and tuple(float(v) for v in mech["orientation"]) == tuple(
+            reading.orientation
+        ):
             return path.stem
     return None
 
@@ -181,8 +197,13 @@ def tricept_readings() -> list[Reading]:
     for joints, ref, side, tilt, hom in itertools.product(*TRICEPT_READINGS.values()):
         if joints == "none" and ref != "normal":
             continue  # the reference does not matter without a cone limit
-        fixed = (("cone_joints", joints), ("cone_reference", ref), ("offset_side", side),
-                 ("tilt_limit", tilt), ("homogenising", hom))
+        fixed = (
+            ("cone_joints", joints),
+            ("cone_reference", ref),
+            ("offset_side", side),
+            ("tilt_limit", tilt),
+            ("homogenising", hom),
+        )
         out.append(Reading("tricept", fixed, (-90.0, 90.0)))
     return out
 
@@ -192,8 +213,20 @@ def tricept_table(readings: list[Reading]) -> pd.DataFrame:
     rows = []
     for reading in readings:
         ev = reading.evaluate(a=p["a"], b=p["b"], d=p["d"])
-        score = np.mean([_log_error(ev.volume, p["V"]), _log_error(ev.inverse_condition_min, p["lci_min"]),
-                         _log_error(ev.inverse_condition_max, p["lci_max"])])
-        rows.append({"reading": reading.label, "V": ev.volume, "1/κ min": ev.inverse_condition_min,
-                     "1/κ max": ev.inverse_condition_max, "score": float(score)})
+        score = np.mean(
+            [
+                _log_error(ev.volume, p["V"]),
+                _log_error(ev.inverse_condition_min, p["lci_min"]),
+                _log_error(ev.inverse_condition_max, p["lci_max"]),
+            ]
+        )
+        rows.append(
+            {
+                "reading": reading.label,
+                "V": ev.volume,
+                "1/κ min": ev.inverse_condition_min,
+                "1/κ max": ev.inverse_condition_max,
+                "score": float(score),
+            }
+        )
     return pd.DataFrame(rows).sort_values("score", kind="stable").reset_index(drop=True)

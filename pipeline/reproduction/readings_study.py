@@ -14,10 +14,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from pipeline.reproduction.readings import H4_PAPER
+from pipeline.report.tables import rel, table
 from pipeline.reproduction.driver import Reproduction
 from pipeline.reproduction.h4 import SEEDS, TABLE_EXPERIMENTS, h4_table_runs
-from pipeline.report.tables import rel, table
+from pipeline.reproduction.readings import H4_PAPER
 
 
 def _fmt_pair(v: float, g: float) -> str:
@@ -37,32 +37,57 @@ def plan(r: Reproduction) -> SimpleNamespace:
     default = rd.Reading("h4", (("base", "scaled"), ("homogenising", "h")), (-45.0, 45.0))
     shown = pd.concat([h4.head(8), h4[h4["reading"] == default.label]]).drop_duplicates("reading")
     names = list(rd.H4_PAPER)
-    rows = [[row["reading"] + (" (default)" if row["reading"] == default.label else ""), f"{row['score']:.2f}",
-             "yes" if row["paper's GDI order"] else "no",
-             *[_fmt_pair(row[f"{n} V"], row[f"{n} GDI"]) for n in names]] for _, row in shown.iterrows()]
+    rows = [
+        [
+            row["reading"] + (" (default)" if row["reading"] == default.label else ""),
+            f"{row['score']:.2f}",
+            "yes" if row["paper's GDI order"] else "no",
+            *[_fmt_pair(row[f"{n} V"], row[f"{n} GDI"]) for n in names],
+        ]
+        for _, row in shown.iterrows()
+    ]
     paper_row = ["paper", "", "", *[_fmt_pair(rd.H4_PAPER[n]["V"], rd.H4_PAPER[n]["gdi"]) for n in names]]
     by_label = {reading.label: reading for reading in h4_all}
     candidates = [by_label[label] for label in h4["reading"].head(3)] + [default]
-    paper_x = {"max V": np.array([rd.H4_PAPER["Table 1 (max V)"][k] / 100 for k in ("d", "h", "Qz")]),
-               "max GDI": np.array([rd.H4_PAPER["Table 2 (max GDI)"][k] / 100 for k in ("d", "h", "Qz")]),
-               "η(0.5)": np.array([rd.H4_PAPER["Table 3 (w_d = 0.5)"][k] / 100 for k in ("d", "h", "Qz")])}
+    paper_x = {
+        "max V": np.array([rd.H4_PAPER["Table 1 (max V)"][k] / 100 for k in ("d", "h", "Qz")]),
+        "max GDI": np.array([rd.H4_PAPER["Table 2 (max GDI)"][k] / 100 for k in ("d", "h", "Qz")]),
+        "η(0.5)": np.array([rd.H4_PAPER["Table 3 (w_d = 0.5)"][k] / 100 for k in ("d", "h", "Qz")]),
+    }
     # Tricept
     tri_all = rd.tricept_readings()
     tri = r.memo(rd.tricept_table)(tri_all)
-    tri_default = rd.Reading("tricept", (("cone_joints", "both"), ("cone_reference", "normal"), ("offset_side", 1),
-                                         ("tilt_limit", None), ("homogenising", "arm")), (-90.0, 90.0))
+    tri_default = rd.Reading(
+        "tricept",
+        (
+            ("cone_joints", "both"),
+            ("cone_reference", "normal"),
+            ("offset_side", 1),
+            ("tilt_limit", None),
+            ("homogenising", "arm"),
+        ),
+        (-90.0, 90.0),
+    )
     tri_shown = pd.concat([tri.head(8), tri[tri["reading"] == tri_default.label]]).drop_duplicates("reading")
-    tri_rows = [[row["reading"] + (" (default)" if row["reading"] == tri_default.label else ""),
-                 f"{row['score']:.2f}", f"{row['V']:.1f}", f"{row['1/κ min']:.2f}-{row['1/κ max']:.2f}"]
-                for _, row in tri_shown.iterrows()]
+    tri_rows = [
+        [
+            row["reading"] + (" (default)" if row["reading"] == tri_default.label else ""),
+            f"{row['score']:.2f}",
+            f"{row['V']:.1f}",
+            f"{row['1/κ min']:.2f}-{row['1/κ max']:.2f}",
+        ]
+        for _, row in tri_shown.iterrows()
+    ]
     tri_by_label = {reading.label: reading for reading in tri_all}
     tri_candidates = [tri_by_label[label] for label in tri["reading"].head(2)]
     if tri_default not in tri_candidates:
         tri_candidates.append(tri_default)
     tri_candidates.append(tri_by_label[tri[tri["reading"].str.contains("tilt_limit=30")]["reading"].iloc[0]])
     tilt_row = tri[tri["reading"] == tri_candidates[-1].label].iloc[0]
-    tilt_note = (f"1/κ {tilt_row['1/κ min']:.2f}-{tilt_row['1/κ max']:.2f} for the paper's design, the readings "
-                 f"whose smallest 1/κ comes nearest the paper's 0.57")
+    tilt_note = (
+        f"1/κ {tilt_row['1/κ min']:.2f}-{tilt_row['1/κ max']:.2f} for the paper's design, the readings "
+        f"whose smallest 1/κ comes nearest the paper's 0.57"
+    )
     tri_x = {"max V": np.array([rd.TRICEPT_PAPER[k] for k in ("a", "b", "d")])}
     h4_calls = [(c, paper_x, cache) for c in candidates]
     tri_calls = [(c, tri_x, cache, (0.0,)) for c in tri_candidates]
@@ -70,21 +95,36 @@ def plan(r: Reproduction) -> SimpleNamespace:
     preset = rd.reading_preset(candidates[0])
     requests = [(name, (f"+reading={preset}",)) for name in (*TABLE_EXPERIMENTS, "h4_fig8_coarse")] if preset else []
     tasks = r.pending(rd.check_reading, [*tri_calls, *h4_calls])
-    return SimpleNamespace(h4=h4, names=names, rows=rows, paper_row=paper_row, candidates=candidates, default=default,
-                           tri=tri, tri_default=tri_default, tri_rows=tri_rows, tri_candidates=tri_candidates,
-                           tilt_note=tilt_note, h4_calls=h4_calls, tri_calls=tri_calls, preset=preset,
-                           requests=requests, tasks=tasks)
+    return SimpleNamespace(
+        h4=h4,
+        names=names,
+        rows=rows,
+        paper_row=paper_row,
+        candidates=candidates,
+        default=default,
+        tri=tri,
+        tri_default=tri_default,
+        tri_rows=tri_rows,
+        tri_candidates=tri_candidates,
+        tilt_note=tilt_note,
+        h4_calls=h4_calls,
+        tri_calls=tri_calls,
+        preset=preset,
+        requests=requests,
+        tasks=tasks,
+    )
 
 
-def readings_study(r: Reproduction, planned: SimpleNamespace, default_frames: dict[str, pd.DataFrame],
-                   default_sweep: pd.DataFrame) -> None:
+def readings_study(
+    r: Reproduction, planned: SimpleNamespace, default_frames: dict[str, pd.DataFrame], default_sweep: pd.DataFrame
+) -> None:
     """Which reading of the papers' open choices fits their numbers (pipeline.reproduction.readings); ``planned``
     is :func:`plan`'s (its re-runs and checks run in the document's batch or, if not, here)."""
     from pipeline.reproduction import readings as rd
 
     h4, names, rows, paper_row, preset = planned.h4, planned.names, planned.rows, planned.paper_row, planned.preset
-    candidates, default, h4_calls = planned.candidates, planned.default, planned.h4_calls
-    tri, tri_default, tri_rows, tri_candidates = planned.tri, planned.tri_default, planned.tri_rows, planned.tri_candidates
+    candidates, h4_calls = planned.candidates, planned.h4_calls
+    tri, tri_default, tri_rows = planned.tri, planned.tri_default, planned.tri_rows
     tilt_note, tri_calls = planned.tilt_note, planned.tri_calls
     best = candidates[0]
     scaled_preset = rd.reading_preset(rd.Reading("h4", (("base", "scaled"), ("homogenising", "none")), (-15.0, 15.0)))
@@ -95,11 +135,17 @@ def readings_study(r: Reproduction, planned: SimpleNamespace, default_frames: di
         frames = h4_table_runs(r, extra)
         for label, p in rd.H4_PAPER.items():
             ours, default_frame = frames[label], default_frames[label]
-            table_rows.append([label, _fmt_pair(p["V"], p["gdi"]),
-                               _fmt_pair(default_frame["volume"].mean(), default_frame["gdi"].mean()),
-                               _fmt_pair(ours["volume"].mean(), ours["gdi"].mean()),
-                               rel(ours["volume"].mean(), p["V"]), rel(ours["gdi"].mean(), p["gdi"]),
-                               f"{100 * ours['reference_gap'].mean():.2f} %"])
+            table_rows.append(
+                [
+                    label,
+                    _fmt_pair(p["V"], p["gdi"]),
+                    _fmt_pair(default_frame["volume"].mean(), default_frame["gdi"].mean()),
+                    _fmt_pair(ours["volume"].mean(), ours["gdi"].mean()),
+                    rel(ours["volume"].mean(), p["V"]),
+                    rel(ours["gdi"].mean(), p["gdi"]),
+                    f"{100 * ours['reference_gap'].mean():.2f} %",
+                ]
+            )
         best_sweep = r.experiment("h4_fig8_coarse", extra)
         fig, axes = plt.subplots(1, 2, figsize=(13, 4.4), layout="constrained")
         for ax, (title, sweep) in zip(axes, (("default reading", default_sweep), (f"reading {preset}", best_sweep))):
@@ -116,20 +162,38 @@ def readings_study(r: Reproduction, planned: SimpleNamespace, default_frames: di
         fig.savefig(r.figures / "h4_fig8_readings.png", dpi=150)
         plt.close(fig)
     checks = r.memo_map(rd.check_reading, h4_calls)
-    check_rows = [[c["reading"], f"{c['max V paper/optimum']:.3f}", f"{c['max GDI paper/optimum']:.3f}",
-                   f"{c['η(0.5) paper/optimum']:.3f}", f"{c['spearman V-GDI']:+.2f}",
-                   f"{c['GDI at max-V / max GDI']:.2f}",
-                   "none" if c["collapse w_d"] is None else f"{c['collapse w_d']:.2f}",
-                   " → ".join(f"{v:.3g}" for v in c["sweep V"])] for c in checks]
+    check_rows = [
+        [
+            c["reading"],
+            f"{c['max V paper/optimum']:.3f}",
+            f"{c['max GDI paper/optimum']:.3f}",
+            f"{c['η(0.5) paper/optimum']:.3f}",
+            f"{c['spearman V-GDI']:+.2f}",
+            f"{c['GDI at max-V / max GDI']:.2f}",
+            "none" if c["collapse w_d"] is None else f"{c['collapse w_d']:.2f}",
+            " → ".join(f"{v:.3g}" for v in c["sweep V"]),
+        ]
+        for c in checks
+    ]
     tri_checks = r.memo_map(rd.check_reading, tri_calls)
-    tri_check_rows = [[c["reading"], f"{c['max V optimum']:.1f}",
-                       ", ".join(f"{v:.4g}" for v in c["max V design"]), f"{c['max V paper/optimum']:.3f}",
-                       f"{c['spearman V-GDI']:+.2f}"] for c in tri_checks]
-    best_h4, best_tri = h4.iloc[0], tri.iloc[0]
+    tri_check_rows = [
+        [
+            c["reading"],
+            f"{c['max V optimum']:.1f}",
+            ", ".join(f"{v:.4g}" for v in c["max V design"]),
+            f"{c['max V paper/optimum']:.3f}",
+            f"{c['spearman V-GDI']:+.2f}",
+        ]
+        for c in tri_checks
+    ]
+    best_tri = tri.iloc[0]
     h4_verdict = _h4_verdict(h4, names)
-    inert_note = ("Under it d has no effect on V or GDI (the base tracks the plate), so it cannot be the default "
-                  "(every design variable must act; `tests/test_models.py`)."
-                  if "base=tracking" in best.label else "Under it d, h and Qz all act.")
+    inert_note = (
+        "Under it d has no effect on V or GDI (the base tracks the plate), so it cannot be the default "
+        "(every design variable must act; `tests/test_models.py`)."
+        if "base=tracking" in best.label
+        else "Under it d, h and Qz all act."
+    )
     tri_verdict = _tricept_verdict(tri)
     r.add(f"""
 ## Readings study: which interpretation did the papers use?
@@ -178,7 +242,7 @@ max over the workspace). The best eight and the default:
 
 {table(["reading", "score", "V", "1/κ range"], [["paper", "", "944.2", "0.57-0.61"], *tri_rows])}
 
-Best reading by score: **{best_tri['reading']}**{" (the default)" if best_tri['reading'] == tri_default.label else ""}.
+Best reading by score: **{best_tri["reading"]}**{" (the default)" if best_tri["reading"] == tri_default.label else ""}.
 For the best readings, the default and a central-joint tilt limit of 30° ({tilt_note}): our
 maximum-volume optimum (IPOP-CMA-ES + polish, design (a, b, d) in mm) and the paper design's volume
 over it:
@@ -195,28 +259,37 @@ def _h4_verdict(h4: pd.DataFrame, names: list[str]) -> str:
     from pipeline.reproduction.readings import H4_DEGENERATE_V
 
     def factors(row: pd.Series) -> list[float]:
-        out = [max(row[f"{n} GDI"] / H4_PAPER[n]["gdi"], H4_PAPER[n]["gdi"] / max(row[f"{n} GDI"], 1e-12))
-               for n in names]
-        out += [max(row[f"{n} V"] / H4_PAPER[n]["V"], H4_PAPER[n]["V"] / max(row[f"{n} V"], 1e-12))
-                for n in names if n not in H4_DEGENERATE_V]
+        out = [
+            max(row[f"{n} GDI"] / H4_PAPER[n]["gdi"], H4_PAPER[n]["gdi"] / max(row[f"{n} GDI"], 1e-12)) for n in names
+        ]
+        out += [
+            max(row[f"{n} V"] / H4_PAPER[n]["V"], H4_PAPER[n]["V"] / max(row[f"{n} V"], 1e-12))
+            for n in names
+            if n not in H4_DEGENERATE_V
+        ]
         return out
 
     worst = h4.apply(lambda row: max(factors(row)), axis=1)
     within2 = int((worst <= 2.0).sum())
-    in_range = h4[h4.apply(lambda row: all(0.03 <= row[f"{n} GDI"] <= 0.1 for n in names
-                                            if n not in H4_DEGENERATE_V), axis=1)]
+    in_range = h4[
+        h4.apply(lambda row: all(0.03 <= row[f"{n} GDI"] <= 0.1 for n in names if n not in H4_DEGENERATE_V), axis=1)
+    ]
     lengths = sorted({r.split("homogenising=")[1].split(",")[0] for r in in_range["reading"]})
     ordered = int(h4["paper's GDI order"].sum())
     best = h4.iloc[0]
-    verdict = (f"{within2} of the {len(h4)} readings bring every (V, GDI) pair within a factor 2 of the paper "
-               f"(the best reading's worst pair is off by a factor {worst.iloc[0]:.1f}; its score "
-               f"{best['score']:.2f} is a typical factor of {math.exp(best['score']):.1f}). ")
+    verdict = (
+        f"{within2} of the {len(h4)} readings bring every (V, GDI) pair within a factor 2 of the paper "
+        f"(the best reading's worst pair is off by a factor {worst.iloc[0]:.1f}; its score "
+        f"{best['score']:.2f} is a typical factor of {math.exp(best['score']):.1f}). "
+    )
     if within2 == 0:
         verdict += "**Nothing of Tables 1-3 is reproduced** within any tolerance we would state. "
-    verdict += (f"What does match: GDIs of the paper's magnitude (0.03-0.1 for the four non-degenerate designs) "
-                f"appear under {len(in_range)} readings, all with the homogenising length "
-                f"{' or '.join(f'`{x}`' for x in lengths) or '(none)'}; {ordered} readings give the paper's GDI "
-                f"order T1 < T3(0.25) < T3(0.5) < T3(0.75).")
+    verdict += (
+        f"What does match: GDIs of the paper's magnitude (0.03-0.1 for the four non-degenerate designs) "
+        f"appear under {len(in_range)} readings, all with the homogenising length "
+        f"{' or '.join(f'`{x}`' for x in lengths) or '(none)'}; {ordered} readings give the paper's GDI "
+        f"order T1 < T3(0.25) < T3(0.5) < T3(0.75)."
+    )
     return verdict
 
 
@@ -225,14 +298,22 @@ def _tricept_verdict(tri: pd.DataFrame) -> str:
     from pipeline.reproduction.readings import TRICEPT_PAPER as p
 
     v_ok = set(tri.loc[(tri["V"] / p["V"] - 1).abs() <= 0.03, "reading"])
-    lci_ok = set(tri.loc[((tri["1/κ min"] - p["lci_min"]).abs() <= 0.05)
-                         & ((tri["1/κ max"] - p["lci_max"]).abs() <= 0.05), "reading"])
+    lci_ok = set(
+        tri.loc[
+            ((tri["1/κ min"] - p["lci_min"]).abs() <= 0.05) & ((tri["1/κ max"] - p["lci_max"]).abs() <= 0.05), "reading"
+        ]
+    )
     both = v_ok & lci_ok
-    text = (f"V within 3 % of the paper's {p['V']} mm·rad²: {len(v_ok)} readings; the 1/κ range within ±0.05 of "
-            f"{p['lci_min']}-{p['lci_max']}: {len(lci_ok)} readings; both: {len(both)}. ")
+    text = (
+        f"V within 3 % of the paper's {p['V']} mm·rad²: {len(v_ok)} readings; the 1/κ range within ±0.05 of "
+        f"{p['lci_min']}-{p['lci_max']}: {len(lci_ok)} readings; both: {len(both)}. "
+    )
     if both:
         text += "Table 2 is **reproduced** (V within 3 %, 1/κ within ±0.05) under: " + "; ".join(sorted(both)) + "."
     else:
-        text += ("No single reading gives both, so Table 2 is **not reproduced**"
-                 + ("; the volume alone is, within 3 %, under: " + "; ".join(sorted(v_ok)) if v_ok else "") + ".")
+        text += (
+            "No single reading gives both, so Table 2 is **not reproduced**"
+            + ("; the volume alone is, within 3 %, under: " + "; ".join(sorted(v_ok)) if v_ok else "")
+            + "."
+        )
     return text

@@ -11,8 +11,8 @@ from matplotlib.colors import ListedColormap
 
 from kinematics import get_mechanism
 from kinematics.workspace import evaluate
-from pipeline.reproduction.driver import Reproduction
 from pipeline.report.tables import rel, table
+from pipeline.reproduction.driver import Reproduction
 
 
 def rpr2(r: Reproduction) -> None:
@@ -33,19 +33,27 @@ def rpr2(r: Reproduction) -> None:
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.5))
     for ax, inside, label in ((axes[0], inside_alg, "algebraic (eq. 1-2)"), (axes[1], inside_dh, "DH (eq. 10)")):
         # one cell per grid node (a scatter of 360,000 sub-pixel markers drew nothing)
-        ax.pcolormesh(xs, ys, np.ma.masked_where(~inside.reshape(n, n).T, np.ones((n, n))),
-                      cmap=ListedColormap(["tab:blue"]), shading="nearest")
+        ax.pcolormesh(
+            xs,
+            ys,
+            np.ma.masked_where(~inside.reshape(n, n).T, np.ones((n, n))),
+            cmap=ListedColormap(["tab:blue"]),
+            shading="nearest",
+        )
         ax.set_aspect("equal")
-        ax.set_title(f"2-RPR workspace (b = 5 mm, q ∈ [6, 9.6] mm),\n{label}: area {inside.sum() * cell:.3f} mm²",
-                     fontsize=10)
+        ax.set_title(
+            f"2-RPR workspace (b = 5 mm, q ∈ [6, 9.6] mm),\n{label}: area {inside.sum() * cell:.3f} mm²", fontsize=10
+        )
         ax.set_xlabel("x [mm]")
         ax.set_ylabel("y [mm]")
     fig.savefig(r.figures / "rpr2_workspace.png", dpi=90, bbox_inches="tight")
     plt.close(fig)
-    rows = [["algebraic model, grid 600²", round(inside_alg.sum() * cell, 4), rel(inside_alg.sum() * cell, exact)],
-            ["DH-derived model, grid 600²", round(inside_dh.sum() * cell, 4), rel(inside_dh.sum() * cell, exact)],
-            [f"evaluator (default grid {ev.resolution}²)", round(ev.volume, 4), rel(ev.volume, exact)],
-            ["exact (closed-form lens areas)", round(exact, 4), "-"]]
+    rows = [
+        ["algebraic model, grid 600²", round(inside_alg.sum() * cell, 4), rel(inside_alg.sum() * cell, exact)],
+        ["DH-derived model, grid 600²", round(inside_dh.sum() * cell, 4), rel(inside_dh.sum() * cell, exact)],
+        [f"evaluator (default grid {ev.resolution}²)", round(ev.volume, 4), rel(ev.volume, exact)],
+        ["exact (closed-form lens areas)", round(exact, 4), "-"],
+    ]
     r.add(f"""
 ## Planar 2-RPR (seed 004)
 

@@ -12,13 +12,12 @@ import numpy as np
 
 from kinematics import get_mechanism
 from kinematics.workspace import evaluate
-from pipeline.reproduction.driver import Reproduction
 from pipeline.report.tables import rel, table
+from pipeline.reproduction.driver import Reproduction
 
 SEEDS = (0, 1, 2)
 #: the thesis' example geometry (mm): base and platform points, leg range
-THESIS = dict(base=[[0, 0], [200, 0], [0, 200]], platform=[[0, 0], [50, 0], [40, 40]], rho_min=80.0,
-              rho_max=160.0)
+THESIS = dict(base=[[0, 0], [200, 0], [0, 200]], platform=[[0, 0], [50, 0], [40, 40]], rho_min=80.0, rho_max=160.0)
 
 
 def thesis_jacobian_program(x: float, y: float, phi_deg: float, legs: tuple[float, float, float]) -> np.ndarray:
@@ -30,12 +29,21 @@ def thesis_jacobian_program(x: float, y: float, phi_deg: float, legs: tuple[floa
     t1, t2, t3 = 200.0, 0.0, 200.0
     l2, l3, gam = 50.0, 40.0 * math.sqrt(2.0), math.pi / 4
     phi = math.radians(phi_deg)
-    a = np.array([
-        [x, y, 0.0],
-        [(x - t1) + l2 * math.cos(phi), y + l2 * math.sin(phi), l2 * (y * math.cos(phi) - (x - t1) * math.sin(phi))],
-        [(x - t2) + l3 * math.cos(phi + gam), (y - t3) + l3 * math.sin(phi + gam),
-         l3 * ((y - t3) * math.cos(phi + gam) - (x - t3) * math.sin(phi + gam))],
-    ])
+    a = np.array(
+        [
+            [x, y, 0.0],
+            [
+                (x - t1) + l2 * math.cos(phi),
+                y + l2 * math.sin(phi),
+                l2 * (y * math.cos(phi) - (x - t1) * math.sin(phi)),
+            ],
+            [
+                (x - t2) + l3 * math.cos(phi + gam),
+                (y - t3) + l3 * math.sin(phi + gam),
+                l3 * ((y - t3) * math.cos(phi + gam) - (x - t3) * math.sin(phi + gam)),
+            ],
+        ]
+    )
     return -np.linalg.inv(a) @ np.diag(legs)
 
 
@@ -50,26 +58,44 @@ def rpr3(r: Reproduction) -> None:
     m = get_mechanism("rpr3", **THESIS)
     q = np.array([100.0, 120.0, 150.0])
     modes = m.forward(q)
-    thesis = {"mode 1": ((97.99, 19.91, 85.01), {500: (97.849462, 20.039101, 84.1045)}),
-              "mode 2": ((52.86, 84.95, -33.45), {1000: (52.981427, 85.141740, -33.7865)})}
+    thesis = {
+        "mode 1": ((97.99, 19.91, 85.01), {500: (97.849462, 20.039101, 84.1045)}),
+        "mode 2": ((52.86, 84.95, -33.45), {1000: (52.981427, 85.141740, -33.7865)}),
+    }
     ours = {"mode 1": modes[1], "mode 2": modes[0]}
     rows = []
     for label, (alg, ga) in thesis.items():
         pose = ours[label]
         rows.append([label, "thesis algebraic", *alg, "-"])
-        rows.append([label, "ours, degree-6 polynomial", round(pose[0], 3), round(pose[1], 3),
-                     round(math.degrees(pose[2]), 3), f"{np.abs(m.inverse(pose[None])[0] - q).max():.1e}"])
+        rows.append(
+            [
+                label,
+                "ours, degree-6 polynomial",
+                round(pose[0], 3),
+                round(pose[1], 3),
+                round(math.degrees(pose[2]), 3),
+                f"{np.abs(m.inverse(pose[None])[0] - q).max():.1e}",
+            ]
+        )
         for gens, vals in ga.items():
             rows.append([label, f"thesis GA, {gens} generations", *vals, "-"])
     for gens in (500, 1000):
         for seed in SEEDS:
             sol = r.memo(thesis_forward_ga)(q, seed, gens)
             nearest = min(ours, key=lambda k: np.linalg.norm(ours[k][:2] - sol[:2]))
-            rows.append([nearest, f"ours, thesis GA, {gens} gen., seed {seed}", round(sol[0], 3),
-                         round(sol[1], 3), round(math.degrees(sol[2]), 3),
-                         f"{np.abs(m.inverse(sol[None])[0] - q).max():.2f}"])
-    j_thesis = np.array([[-0.855658, 0.190268, -0.0903346], [-0.811356, -0.93643, 0.444595],
-                         [-0.00522636, -0.0127963, -0.00770599]])
+            rows.append(
+                [
+                    nearest,
+                    f"ours, thesis GA, {gens} gen., seed {seed}",
+                    round(sol[0], 3),
+                    round(sol[1], 3),
+                    round(math.degrees(sol[2]), 3),
+                    f"{np.abs(m.inverse(sol[None])[0] - q).max():.2f}",
+                ]
+            )
+    j_thesis = np.array(
+        [[-0.855658, 0.190268, -0.0903346], [-0.811356, -0.93643, 0.444595], [-0.00522636, -0.0127963, -0.00770599]]
+    )
     pose = modes[1]
     j_ours = m.jacobian(pose[None])[0]
     j_inv = np.linalg.inv(j_ours)
@@ -82,8 +108,14 @@ def rpr3(r: Reproduction) -> None:
     fig, axes = plt.subplots(1, 4, figsize=(18, 4.5), layout="constrained")
     for ax, deg in zip(axes, (15, 30, 45, 60)):
         phi = math.radians(deg)
-        ev = r.memo(evaluate)(m, orientation=(phi, phi), min_inverse_condition=0.0, resolution=240,
-                      return_samples=True, error_estimate=False)
+        ev = r.memo(evaluate)(
+            m,
+            orientation=(phi, phi),
+            min_inverse_condition=0.0,
+            resolution=240,
+            return_samples=True,
+            error_estimate=False,
+        )
         exact = m.exact_area(phi)
         area_rows.append([deg, round(exact, 1), round(ev.volume, 1), rel(ev.volume, exact)])
         pts = ev.samples[ev.inside]
@@ -118,10 +150,17 @@ which mode it finds depends on the seed.
 
 ### §5.3 Jacobian: the thesis' matrix and ours (pose of mode 1)
 
-{table(["matrix", "rows"], [["thesis, printed", mat(j_thesis)],
-                               ["ours, J = B⁻¹A (q̇ = J ẋ)", mat(j_ours)],
-                               ["ours, J⁻¹ (ẋ = J⁻¹ q̇)", mat(j_inv)],
-                               ["thesis program re-run: -A⁻¹B with its a[2][2] index bug, legs (100, 150, 150)", mat(j_prog)]])}
+{
+        table(
+            ["matrix", "rows"],
+            [
+                ["thesis, printed", mat(j_thesis)],
+                ["ours, J = B⁻¹A (q̇ = J ẋ)", mat(j_ours)],
+                ["ours, J⁻¹ (ẋ = J⁻¹ q̇)", mat(j_inv)],
+                ["thesis program re-run: -A⁻¹B with its a[2][2] index bug, legs (100, 150, 150)", mat(j_prog)],
+            ],
+        )
+    }
 
 The printed matrix does not follow from the stated data. It is the output of the thesis' C++
 program (appendix), which computes -A⁻¹B, the forward Jacobian, not the -B⁻¹A of eq. 16. The

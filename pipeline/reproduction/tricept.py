@@ -13,33 +13,48 @@ import numpy as np
 
 from kinematics import get_mechanism
 from kinematics.workspace import evaluate
-from pipeline.reproduction.readings import TRICEPT_PAPER
+from pipeline.report.tables import rel, table
 from pipeline.reproduction.driver import Reproduction
 from pipeline.reproduction.h4 import bound_positions
-from pipeline.report.tables import rel, table
-
+from pipeline.reproduction.readings import TRICEPT_PAPER
 
 
 def tricept(r: Reproduction) -> None:
     """Section "Tricept, Table 2" (experiment ``tricept_table2``)."""
     rows = []
-    designs = {"paper as printed (a=300.062, b=200, d=20)": (300.062, 200.0, 20.0),
-               "paper, a and b swapped (a=200, b=300.062, d=20)": (200.0, 300.062, 20.0)}
+    designs = {
+        "paper as printed (a=300.062, b=200, d=20)": (300.062, 200.0, 20.0),
+        "paper, a and b swapped (a=200, b=300.062, d=20)": (200.0, 300.062, 20.0),
+    }
     for label, (a, b, d) in designs.items():
         mech = get_mechanism("tricept", a=a, b=b, d=d)
         grid = r.memo(evaluate)(mech, resolution=48, error_estimate=False)
         polar = r.memo(evaluate)(mech, method="polar", resolution=32, error_estimate=False)
-        rows.append([label, TRICEPT_PAPER["V"], f"{grid.volume:.1f}", f"{polar.volume:.1f}",
-                     rel(grid.volume, TRICEPT_PAPER["V"]),
-                     f"{grid.inverse_condition_min:.2f}-{grid.inverse_condition_max:.2f}"])
+        rows.append(
+            [
+                label,
+                TRICEPT_PAPER["V"],
+                f"{grid.volume:.1f}",
+                f"{polar.volume:.1f}",
+                rel(grid.volume, TRICEPT_PAPER["V"]),
+                f"{grid.inverse_condition_min:.2f}-{grid.inverse_condition_max:.2f}",
+            ]
+        )
     runs = r.experiment("tricept_table2")
     best = runs.iloc[int(np.argmax(runs["objective_value"]))]
     opt = get_mechanism("tricept", a=best["a"], b=best["b"], d=best["d"])
     grid = r.memo(evaluate)(opt, resolution=48, error_estimate=False)
     polar = r.memo(evaluate)(opt, method="polar", resolution=32, error_estimate=False)
-    rows.append([f"our GA optimum (a={best['a']:.1f}, b={best['b']:.1f}, d={best['d']:.1f})",
-                 "-", f"{grid.volume:.1f}", f"{polar.volume:.1f}", "-",
-                 f"{grid.inverse_condition_min:.2f}-{grid.inverse_condition_max:.2f}"])
+    rows.append(
+        [
+            f"our GA optimum (a={best['a']:.1f}, b={best['b']:.1f}, d={best['d']:.1f})",
+            "-",
+            f"{grid.volume:.1f}",
+            f"{polar.volume:.1f}",
+            "-",
+            f"{grid.inverse_condition_min:.2f}-{grid.inverse_condition_max:.2f}",
+        ]
+    )
     spread = [f"{v:.1f}" for v in runs["volume"]]
     r.cached_figures(slices_png, float(opt.a), float(opt.b), float(opt.d), float(best["volume"]))
     r.add(f"""
@@ -75,10 +90,14 @@ def slices_png(a: float, b: float, d: float, volume: float) -> dict[str, bytes]:
     levels = np.quantile(c_in, [0.2, 0.5, 0.8]) if c_in.size else [500.0, 600.0, 700.0]
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.8), layout="constrained")
     resolution = 90
-    slices = [evaluate(mech, fixed={"c": float(c)}, resolution=resolution, return_samples=True,
-                       error_estimate=False) for c in levels]
-    top = max((float(np.nanmax(np.where(ev.inside, ev.inverse_conditions, np.nan))) for ev in slices
-               if ev.inside.any()), default=1.0)
+    slices = [
+        evaluate(mech, fixed={"c": float(c)}, resolution=resolution, return_samples=True, error_estimate=False)
+        for c in levels
+    ]
+    top = max(
+        (float(np.nanmax(np.where(ev.inside, ev.inverse_conditions, np.nan))) for ev in slices if ev.inside.any()),
+        default=1.0,
+    )
     for ax, c, ev in zip(axes, levels, slices):
         ic = np.where(ev.inside, ev.inverse_conditions, np.nan).reshape(resolution, resolution)
         psi = ev.samples[::resolution, 1]  # C order over (psi, theta): psi varies slowest
@@ -88,8 +107,10 @@ def slices_png(a: float, b: float, d: float, volume: float) -> dict[str, bytes]:
         ax.set_xlabel("ψ [rad]")
         ax.set_ylabel("θ [rad]")
     fig.colorbar(mesh, ax=list(axes), label="1/κ [1] (one scale for the three slices)")
-    fig.suptitle(f"Tricept GA optimum (a, b, d) = ({a:.1f}, {b:.1f}, {d:.1f}) mm, design's V = {volume:.4g} mm·rad²:"
-                 " 1/κ on ψ-θ slices at three heights c")
+    fig.suptitle(
+        f"Tricept GA optimum (a, b, d) = ({a:.1f}, {b:.1f}, {d:.1f}) mm, design's V = {volume:.4g} mm·rad²:"
+        " 1/κ on ψ-θ slices at three heights c"
+    )
     png = io.BytesIO()
     fig.savefig(png, format="png", dpi=100, bbox_inches="tight")
     plt.close(fig)

@@ -134,8 +134,9 @@ def unify(schemas: list[pa.Schema]) -> pa.Schema:
 def conform(table: pa.Table, schema: pa.Schema) -> pa.Table:
     """``table`` with exactly ``schema``'s fields, in its order: absent columns null, types cast."""
     present = set(table.column_names)
-    arrays = [table.column(f.name).cast(f.type) if f.name in present
-              else pa.nulls(table.num_rows, f.type) for f in schema]
+    arrays = [
+        table.column(f.name).cast(f.type) if f.name in present else pa.nulls(table.num_rows, f.type) for f in schema
+    ]
     return pa.Table.from_arrays(arrays, schema=pa.schema(list(schema), metadata=table.schema.metadata))
 
 
@@ -152,9 +153,13 @@ def _locked(dataset_dir: Path):
 
 def _run_tables(run: Path, manifest: dict, best: pa.Table) -> dict[str, pa.Table]:
     """The run's tables with its ids as leading columns, and its ``runs`` row (``best``: already read)."""
-    ids = {"run_id": manifest["run_id"], "launch_id": manifest["launch_id"], "job": int(manifest["job"]),
-           # runs recorded before the field existed were made as studies
-           "purpose": str((manifest.get("config") or {}).get("purpose", "study"))}
+    ids = {
+        "run_id": manifest["run_id"],
+        "launch_id": manifest["launch_id"],
+        "job": int(manifest["job"]),
+        # runs recorded before the field existed were made as studies
+        "purpose": str((manifest.get("config") or {}).get("purpose", "study")),
+    }
     out = {}
     for table in TABLES:
         path = run / f"{table}.parquet"
@@ -168,13 +173,21 @@ def _run_tables(run: Path, manifest: dict, best: pa.Table) -> dict[str, pa.Table
             data = data.add_column(k, field, pa.array([value] * data.num_rows, typ))
         out[table] = data
     best = out["best"].slice(0, 1).to_pandas()
-    runs = pd.DataFrame([{**ids, "config_hash": manifest["config_hash"],
-                          **{k: best[k].iloc[0] for k in ("experiment", "mechanism", "objective", "w_d",
-                                                          "optimizer", "seed")},
-                          "status": manifest["status"], "wall_time": float(manifest["timings"].get("total", 0.0)),
-                          "overrides": " ".join(manifest.get("overrides", [])),
-                          "code_version": manifest.get("code_version", ""),
-                          "git_commit": manifest.get("git_commit", ""), "source": str(run)}])
+    runs = pd.DataFrame(
+        [
+            {
+                **ids,
+                "config_hash": manifest["config_hash"],
+                **{k: best[k].iloc[0] for k in ("experiment", "mechanism", "objective", "w_d", "optimizer", "seed")},
+                "status": manifest["status"],
+                "wall_time": float(manifest["timings"].get("total", 0.0)),
+                "overrides": " ".join(manifest.get("overrides", [])),
+                "code_version": manifest.get("code_version", ""),
+                "git_commit": manifest.get("git_commit", ""),
+                "source": str(run),
+            }
+        ]
+    )
     out["runs"] = to_table(runs)
     return out
 
@@ -198,8 +211,10 @@ def aggregate(sources: Path | list[Path], dataset_dir: Path) -> AggregateReport:
 
     check_writable("--dataset", dataset_dir)
     if dataset_dir.exists() and any(dataset_dir.iterdir()) and not (dataset_dir / "runs").is_dir():
-        raise ConfigError(f"--dataset={str(dataset_dir)!r} is invalid: the directory holds something else "
-                          f"than a dataset; allowed: an empty, new or dataset directory")
+        raise ConfigError(
+            f"--dataset={str(dataset_dir)!r} is invalid: the directory holds something else "
+            f"than a dataset; allowed: an empty, new or dataset directory"
+        )
     report = AggregateReport()
     records, report.skipped = _collect(sources)
     for line in report.skipped:
@@ -219,13 +234,19 @@ def aggregate(sources: Path | list[Path], dataset_dir: Path) -> AggregateReport:
             _build_and_swap(dataset_dir, new, best_tables, set(damaged), sources)
         report.added = [m["run_id"] for _, m in new if m["run_id"] not in damaged]
     report.best_tables = list(best_tables.values())
-    log.info("aggregate: %d runs added, %d already present, %d skipped -> %s", len(report.added),
-             len(report.present), len(report.skipped), dataset_dir)
+    log.info(
+        "aggregate: %d runs added, %d already present, %d skipped -> %s",
+        len(report.added),
+        len(report.present),
+        len(report.skipped),
+        dataset_dir,
+    )
     return report
 
 
-def _sources_of_damaged(damaged: dict[str, str], sources: dict[str, str], records: list[tuple[Path, dict]],
-                        best_tables: dict[str, pa.Table]) -> list[tuple[Path, dict]]:
+def _sources_of_damaged(
+    damaged: dict[str, str], sources: dict[str, str], records: list[tuple[Path, dict]], best_tables: dict[str, pa.Table]
+) -> list[tuple[Path, dict]]:
     """The source runs of damaged dataset runs that are not among ``records`` (read from the
     recorded source directory); one line per damaged run, rebuilt or removed."""
     given = {m["run_id"] for _, m in records}
@@ -235,19 +256,32 @@ def _sources_of_damaged(damaged: dict[str, str], sources: dict[str, str], record
         manifest = read_manifest(source) if source is not None else None
         if run_id in given:
             log.warning("aggregate: dataset run %s: %s; rebuilt from its source run", run_id, problem)
-        elif (manifest is not None and manifest.get("run_id") == run_id and manifest.get("status") == "complete"
-              and not readable_run(source, manifest)):
+        elif (
+            manifest is not None
+            and manifest.get("run_id") == run_id
+            and manifest.get("status") == "complete"
+            and not readable_run(source, manifest)
+        ):
             log.warning("aggregate: dataset run %s: %s; rebuilt from %s", run_id, problem, source)
             best_tables[run_id] = pq.read_table(source / "best.parquet")
             out.append((source, manifest))
         else:
-            log.warning("aggregate: dataset run %s: %s; removed from the dataset (its source run %s is gone "
-                        "or unreadable)", run_id, problem, source or "is unknown")
+            log.warning(
+                "aggregate: dataset run %s: %s; removed from the dataset (its source run %s is gone or unreadable)",
+                run_id,
+                problem,
+                source or "is unknown",
+            )
     return out
 
 
-def _build_and_swap(dataset_dir: Path, new: list[tuple[Path, dict]], best_tables: dict[str, pa.Table],
-                    remove: set[str] = frozenset(), sources: dict[str, str] | None = None) -> None:
+def _build_and_swap(
+    dataset_dir: Path,
+    new: list[tuple[Path, dict]],
+    best_tables: dict[str, pa.Table],
+    remove: set[str] = frozenset(),
+    sources: dict[str, str] | None = None,
+) -> None:
     """Build the new dataset in a staging copy (``remove``: run ids whose files are dropped
     first; ``new``: runs added), record every file's checksum, swap it in."""
     token = secrets.token_hex(4)
@@ -303,11 +337,11 @@ def _with_field_metadata(schema: pa.Schema, sources: list[pa.Schema]) -> pa.Sche
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m pipeline.stages.aggregate",
-                                     description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(prog="python -m pipeline.stages.aggregate", description=__doc__.split("\n")[0])
     parser.add_argument("sources", type=Path, nargs="+", help="run, sweep or parent directories")
-    parser.add_argument("--dataset", type=Path, default=Path("outputs/dataset"),
-                        help="dataset directory (default: outputs/dataset)")
+    parser.add_argument(
+        "--dataset", type=Path, default=Path("outputs/dataset"), help="dataset directory (default: outputs/dataset)"
+    )
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     try:
@@ -318,9 +352,17 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("error: interrupted; the dataset is unchanged", file=sys.stderr)
         return 130
-    print(json.dumps({"dataset": str(args.dataset), "added": len(report.added),
-                      "present": len(report.present), "skipped": len(report.skipped),
-                      "repaired": len(report.repaired)}))
+    print(
+        json.dumps(
+            {
+                "dataset": str(args.dataset),
+                "added": len(report.added),
+                "present": len(report.present),
+                "skipped": len(report.skipped),
+                "repaired": len(report.repaired),
+            }
+        )
+    )
     return 0
 
 

@@ -75,8 +75,7 @@ def verify_dataset(dataset_dir: Path) -> tuple[set[str], dict[str, str], dict[st
     files = dataset_files(dataset_dir)
     registry = read_registry(dataset_dir)
     if registry is None and files:
-        log.warning("aggregate: %s has no readable checksums.json; its files are checked by reading them",
-                    dataset_dir)
+        log.warning("aggregate: %s has no readable checksums.json; its files are checked by reading them", dataset_dir)
     registry = registry or {}
     present, damaged = set(), {}
     sources = {run_id: str(entry.get("source", "")) for run_id, entry in registry.items()}
@@ -88,14 +87,26 @@ def verify_dataset(dataset_dir: Path) -> tuple[set[str], dict[str, str], dict[st
             missing = sorted(set(recorded) - set(have))
             altered = sorted(rel for rel in set(recorded) & set(have) if sha256_file(have[rel]) != recorded[rel])
             extra = sorted(set(have) - set(recorded))
-            problem = (f"missing {', '.join(missing)}" if missing else f"checksum mismatch in {', '.join(altered)}"
-                       if altered else f"unrecorded {', '.join(extra)}" if extra else "")
+            problem = (
+                f"missing {', '.join(missing)}"
+                if missing
+                else f"checksum mismatch in {', '.join(altered)}"
+                if altered
+                else f"unrecorded {', '.join(extra)}"
+                if extra
+                else ""
+            )
         else:
             needed = [f"{t}/{run_id}.parquet" for t in (*REQUIRED_TABLES, "runs")]
             missing = [rel for rel in needed if rel not in have]
             unreadable = [rel for rel in sorted(have) if not _readable(have[rel])]
-            problem = (f"missing {', '.join(missing)}" if missing else
-                       f"unreadable {', '.join(unreadable)}" if unreadable else "")
+            problem = (
+                f"missing {', '.join(missing)}"
+                if missing
+                else f"unreadable {', '.join(unreadable)}"
+                if unreadable
+                else ""
+            )
             if not problem:
                 sources[run_id] = ""
         if problem:
@@ -134,6 +145,10 @@ def readable_run(run: Path, manifest: dict) -> str:
 
 def registry_entries(dataset_dir: Path, sources: dict[str, str]) -> dict[str, dict]:
     """Checksums of every file now in ``dataset_dir``, by run id, with each run's source."""
-    return {run_id: {"source": sources.get(run_id, ""),
-                     "files": {rel: sha256_file(path) for rel, path in sorted(paths.items())}}
-            for run_id, paths in dataset_files(dataset_dir).items()}
+    return {
+        run_id: {
+            "source": sources.get(run_id, ""),
+            "files": {rel: sha256_file(path) for rel, path in sorted(paths.items())},
+        }
+        for run_id, paths in dataset_files(dataset_dir).items()
+    }

@@ -44,8 +44,13 @@ def evaluate_design(c: Config, design: list[float]) -> pd.DataFrame:
     rows = DesignEvaluator(m, resolution, 1).evaluate(x[None, :])
     frame = evaluation_frame(rows).drop(columns=["valid"])
     row: dict = {"mechanism": m.name, **dict(zip(names, x.tolist()))}
-    row.update({param_column(k, mech.param_unit(k, v)): v for k, v in mech.params().items()
-                if isinstance(v, (int, float, str)) and not isinstance(v, bool) and k not in names})
+    row.update(
+        {
+            param_column(k, mech.param_unit(k, v)): v
+            for k, v in mech.params().items()
+            if isinstance(v, (int, float, str)) and not isinstance(v, bool) and k not in names
+        }
+    )
     row.update(frame.iloc[0].to_dict())
     row["volume_unit"] = mech.volume_unit(m.orientation_rad())
     row["w_d"] = float(c.objective.w_d)

@@ -28,8 +28,9 @@ def evaluation_frame(rows) -> pd.DataFrame:
     return frame
 
 
-def evaluate_designs(mechanism: MechanismConfig, resolution: int | None, designs: pd.DataFrame,
-                     n_jobs: int = 1) -> pd.DataFrame:
+def evaluate_designs(
+    mechanism: MechanismConfig, resolution: int | None, designs: pd.DataFrame, n_jobs: int = 1
+) -> pd.DataFrame:
     """The sampled designs with one column per evaluation field.
 
     Returns

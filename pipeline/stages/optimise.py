@@ -38,13 +38,13 @@ import pandas as pd
 
 from kinematics.workspace import default_resolution
 from pipeline.config import MechanismConfig, ObjectiveConfig
-from pipeline.stages.evaluate import evaluation_frame
 from pipeline.evaluation import DesignEvaluator
 from pipeline.objectives import EVALUATION_FIELDS, OBJECTIVES, objective_values
 from pipeline.optimizers import OPTIMIZERS, OptimizerConfig, Problem
 from pipeline.optimizers.polish import polish
 from pipeline.optimizers.reference import best_known
 from pipeline.optimizers.sensitivity import flat_intervals
+from pipeline.stages.evaluate import evaluation_frame
 from pipeline.store.parquet import param_column
 
 log = logging.getLogger(__name__)
@@ -66,9 +66,16 @@ class _MemoEvaluator:
         return np.array([self.memo[k] for k in keys])
 
 
-def optimise_design(mechanism: MechanismConfig, resolution: int | None, refine_factor: int,
-                    objective: ObjectiveConfig, optimizer: OptimizerConfig,
-                    initial: np.ndarray | None = None, reference: dict | None = None, n_jobs: int = 1) -> dict:
+def optimise_design(
+    mechanism: MechanismConfig,
+    resolution: int | None,
+    refine_factor: int,
+    objective: ObjectiveConfig,
+    optimizer: OptimizerConfig,
+    initial: np.ndarray | None = None,
+    reference: dict | None = None,
+    n_jobs: int = 1,
+) -> dict:
     """Run the optimisation of one study.
 
     Parameters
@@ -97,16 +104,26 @@ def optimise_design(mechanism: MechanismConfig, resolution: int | None, refine_f
     rows = _MemoEvaluator(DesignEvaluator(mechanism, resolution, n_jobs))
     scalar = Problem(lambda x: objective_values(objective.name, rows(x), objective.w_d), lower, upper)
     algorithm = OPTIMIZERS[optimizer.name](optimizer)
-    log.info("optimise: %s on %s, objective %s (w_d %.3g), about %d evaluations", optimizer.name,
-             mechanism.name, objective.name, objective.w_d, algorithm.expected_evaluations())
+    log.info(
+        "optimise: %s on %s, objective %s (w_d %.3g), about %d evaluations",
+        optimizer.name,
+        mechanism.name,
+        objective.name,
+        objective.w_d,
+        algorithm.expected_evaluations(),
+    )
     if algorithm.n_objectives == 1:
         result = algorithm.run(scalar, initial)
         x, value = result.x, result.fun
         front = None
     else:
         pair = list(optimizer.objectives)
-        multi = Problem(lambda x: np.column_stack([objective_values(n, rows(x), objective.w_d) for n in pair]),
-                        lower, upper, n_objectives=len(pair))
+        multi = Problem(
+            lambda x: np.column_stack([objective_values(n, rows(x), objective.w_d) for n in pair]),
+            lower,
+            upper,
+            n_objectives=len(pair),
+        )
         result = algorithm.run(multi, initial)
         front_x, front_values = result.front
         scores = scalar(front_x)
@@ -131,18 +148,29 @@ def optimise_design(mechanism: MechanismConfig, resolution: int | None, refine_f
     # a multi-objective run evaluates outside the scalar problem: count those too
     multi_objective_evaluations = result.n_evaluations if algorithm.n_objectives > 1 else 0
     best = _best_row(mechanism, resolution, refine_factor, objective, x, value, rows)
-    best.update(optimizer_value=optimizer_value, found_by=found_by, polish_improvement=polish_improvement,
-                n_evaluations=int(scalar.n_evaluations + multi_objective_evaluations))
+    best.update(
+        optimizer_value=optimizer_value,
+        found_by=found_by,
+        polish_improvement=polish_improvement,
+        n_evaluations=int(scalar.n_evaluations + multi_objective_evaluations),
+    )
     best.update(reference_columns(best, reference, names))
     if reference is not None:
-        log.info("optimise: reference %.6g (%s); %s %.6g, %s", reference["value"], reference["found_by"],
-                 optimizer.name, value, best["reference_gap_label"])
+        log.info(
+            "optimise: reference %.6g (%s); %s %.6g, %s",
+            reference["value"],
+            reference["found_by"],
+            optimizer.name,
+            value,
+            best["reference_gap_label"],
+        )
     best.update(flat_intervals(scalar, x, value, names))
     return {"history": history, "best": best, "front": front, "wall_time": wall_time}
 
 
-def reference_stage(mechanism: MechanismConfig, resolution: int | None, refine_factor: int,
-                    objective: ObjectiveConfig, n_jobs: int = 1) -> dict:
+def reference_stage(
+    mechanism: MechanismConfig, resolution: int | None, refine_factor: int, objective: ObjectiveConfig, n_jobs: int = 1
+) -> dict:
     """The reference optimum of one problem (mechanism, resolution, objective), once.
 
     :func:`~pipeline.optimizers.reference.best_known` (several CMA-ES seeds, DE,
@@ -159,14 +187,22 @@ def reference_stage(mechanism: MechanismConfig, resolution: int | None, refine_f
         (``|value_refined - value|``, objective unit).
     """
     rows = _MemoEvaluator(DesignEvaluator(mechanism, resolution, n_jobs))
-    problem = Problem(lambda x: objective_values(objective.name, rows(x), objective.w_d),
-                      np.asarray(mechanism.design.lower), np.asarray(mechanism.design.upper))
+    problem = Problem(
+        lambda x: objective_values(objective.name, rows(x), objective.w_d),
+        np.asarray(mechanism.design.lower),
+        np.asarray(mechanism.design.upper),
+    )
     found = best_known(problem)
     refined = _refined_value(mechanism, resolution, refine_factor, objective, found.x)
     log.info("reference: %.6g by %s, %d evaluations", found.fun, found.summary(), found.n_evaluations)
-    return {"value": float(found.fun), "x": [float(v) for v in found.x], "found_by": found.summary(),
-            "n_evaluations": int(found.n_evaluations), "value_refined": refined,
-            "error": abs(refined - float(found.fun))}
+    return {
+        "value": float(found.fun),
+        "x": [float(v) for v in found.x],
+        "found_by": found.summary(),
+        "n_evaluations": int(found.n_evaluations),
+        "value_refined": refined,
+        "error": abs(refined - float(found.fun)),
+    }
 
 
 def reference_columns(best: dict, reference: dict | None, names: list[str]) -> dict:
@@ -178,41 +214,62 @@ def reference_columns(best: dict, reference: dict | None, names: list[str]) -> d
     "within error" and its percentage is not quoted.
     """
     if reference is None:
-        out = {"reference_value": np.nan, "reference_gap": np.nan, "reference_error": np.nan,
-               "reference_gap_error": np.nan, "reference_gap_within_error": False, "reference_gap_label": "",
-               "reference_found_by": "", "reference_evaluations": 0}
+        out = {
+            "reference_value": np.nan,
+            "reference_gap": np.nan,
+            "reference_error": np.nan,
+            "reference_gap_error": np.nan,
+            "reference_gap_within_error": False,
+            "reference_gap_label": "",
+            "reference_found_by": "",
+            "reference_evaluations": 0,
+        }
         out.update({f"{n}_reference": np.nan for n in names})
         return out
     scale = abs(reference["value"]) or 1.0
     gap = (reference["value"] - best["objective_value"]) / scale
     gap_error = (best["objective_error"] + reference["error"]) / scale
     within = bool(gap <= gap_error)
-    label = f"within error (< {100 * gap_error:.2g} %)" if within else \
-        f"{100 * gap:.3g} % ± {100 * gap_error:.2g} %"
-    out = {"reference_value": float(reference["value"]), "reference_gap": float(gap),
-           "reference_error": float(reference["error"]), "reference_gap_error": float(gap_error),
-           "reference_gap_within_error": within, "reference_gap_label": label,
-           "reference_found_by": reference["found_by"], "reference_evaluations": int(reference["n_evaluations"])}
+    label = f"within error (< {100 * gap_error:.2g} %)" if within else f"{100 * gap:.3g} % ± {100 * gap_error:.2g} %"
+    out = {
+        "reference_value": float(reference["value"]),
+        "reference_gap": float(gap),
+        "reference_error": float(reference["error"]),
+        "reference_gap_error": float(gap_error),
+        "reference_gap_within_error": within,
+        "reference_gap_label": label,
+        "reference_found_by": reference["found_by"],
+        "reference_evaluations": int(reference["n_evaluations"]),
+    }
     out.update({f"{n}_reference": float(v) for n, v in zip(names, reference["x"])})
     return out
 
 
-def _refined_value(mechanism: MechanismConfig, resolution: int | None, refine_factor: int,
-                   objective: ObjectiveConfig, x: np.ndarray) -> float:
+def _refined_value(
+    mechanism: MechanismConfig, resolution: int | None, refine_factor: int, objective: ObjectiveConfig, x: np.ndarray
+) -> float:
     """Objective of design ``x`` at ``refine_factor`` times the resolution (one evaluation)."""
     res = resolution or default_resolution(mechanism.build(x), mechanism.orientation_rad())
     refined_rows = DesignEvaluator(mechanism, res * refine_factor, 1).evaluate(np.asarray(x)[None, :])
     return float(objective_values(objective.name, refined_rows, objective.w_d)[0])
 
 
-def _best_row(mechanism: MechanismConfig, resolution: int | None, refine_factor: int,
-              objective: ObjectiveConfig, x: np.ndarray, value: float, rows: _MemoEvaluator) -> dict:
+def _best_row(
+    mechanism: MechanismConfig,
+    resolution: int | None,
+    refine_factor: int,
+    objective: ObjectiveConfig,
+    x: np.ndarray,
+    value: float,
+    rows: _MemoEvaluator,
+) -> dict:
     """Design, mechanism parameters, evaluation at the run's and at the refined resolution."""
     names = list(mechanism.design.names)
     best: dict = {name: float(v) for name, v in zip(names, x)}
     lower, upper = mechanism.design.lower, mechanism.design.upper
-    best["at_bounds"] = ",".join(f"{n}={'lower' if v <= lo else 'upper'}"
-                                 for n, v, lo, hi in zip(names, x, lower, upper) if v <= lo or v >= hi)
+    best["at_bounds"] = ",".join(
+        f"{n}={'lower' if v <= lo else 'upper'}" for n, v, lo, hi in zip(names, x, lower, upper) if v <= lo or v >= hi
+    )
     mech = mechanism.build(x)
     for key, v in mech.params().items():
         # a design variable's own column already holds it (Tricept a, b, d; 2-RPR b, q_min)

@@ -79,19 +79,33 @@ def run_figures(mechanism, objective, optimizer, plot, optimum: dict) -> dict[st
     design_volume = f"design's V = {best['volume']:.6g} {best['volume_unit']}"
     with tempfile.TemporaryDirectory() as tmp:
         directory = Path(tmp)
-        plot_convergence(optimum["history"], directory / "convergence.png",
-                         f"{optimizer.name} convergence ({what})", f"{symbol(objective.name)} [{unit}]", plot,
-                         reference=best.get("reference_value"))
-        plot_workspace(mech, orientation, mechanism.min_inverse_condition, mechanism.length, directory, what, plot,
-                       design_volume=design_volume)
+        plot_convergence(
+            optimum["history"],
+            directory / "convergence.png",
+            f"{optimizer.name} convergence ({what})",
+            f"{symbol(objective.name)} [{unit}]",
+            plot,
+            reference=best.get("reference_value"),
+        )
+        plot_workspace(
+            mech,
+            orientation,
+            mechanism.min_inverse_condition,
+            mechanism.length,
+            directory,
+            what,
+            plot,
+            design_volume=design_volume,
+        )
         if optimum["front"] is not None:
             units = {"volume": best["volume_unit"]}
             plot_front(optimum["front"], list(optimizer.objectives), directory / "pareto.png", what, plot, units)
         return {p.name: p.read_bytes() for p in sorted(directory.iterdir()) if not p.name.startswith(".")}
 
 
-def plot_convergence(history: pd.DataFrame, path: Path, title: str, ylabel: str, plot=None,
-                     reference: float | None = None) -> Path:
+def plot_convergence(
+    history: pd.DataFrame, path: Path, title: str, ylabel: str, plot=None, reference: float | None = None
+) -> Path:
     """Best and mean objective per generation (seed 000 Fig. 7), with the reference optimum.
 
     ``reference`` (the objective's unit): the reference optimum (CMA-ES + polish,
@@ -104,8 +118,7 @@ def plot_convergence(history: pd.DataFrame, path: Path, title: str, ylabel: str,
     if reference is not None and np.isfinite(reference):
         final = float(history["best"].iloc[-1])
         gap = 100 * (reference - final) / abs(reference) if reference else float("nan")
-        ax.axhline(reference, color="k", ls="--", lw=1,
-                   label=f"reference optimum {reference:.6g} (gap {gap:.3g} %)")
+        ax.axhline(reference, color="k", ls="--", lw=1, label=f"reference optimum {reference:.6g} (gap {gap:.3g} %)")
     ax.set_xlabel("generation [1]")
     ax.set_ylabel(ylabel)
     ax.set_title(title)
@@ -135,29 +148,49 @@ class Slice:
     equal_aspect: bool
 
 
-def workspace_slice(mech: Mechanism, orientation: tuple[float, float], min_ic: float,
-                    length: float | None) -> Slice:
+def workspace_slice(mech: Mechanism, orientation: tuple[float, float], min_ic: float, length: float | None) -> Slice:
     """The mechanism's plot slice (``Mechanism.plot_slice``) of one design, sampled on a
     :data:`SLICE_RESOLUTION` grid (orientation in rad, ``length`` in the length unit)."""
     fixed, (i, j), _ = mech.plot_slice(orientation)
-    label = ", ".join(f"{symbol(n)} = {np.degrees(v):.1f}°" if mech.angular[mech.pose_names.index(n)]
-                      else f"{symbol(n)} = {v:.4g} {mech.length_unit}" for n, v in fixed.items())
-    ev = evaluate(mech, orientation=orientation, min_inverse_condition=min_ic, length=length, fixed=fixed,
-                  resolution=SLICE_RESOLUTION, return_samples=True, error_estimate=False)
+    label = ", ".join(
+        f"{symbol(n)} = {np.degrees(v):.1f}°"
+        if mech.angular[mech.pose_names.index(n)]
+        else f"{symbol(n)} = {v:.4g} {mech.length_unit}"
+        for n, v in fixed.items()
+    )
+    ev = evaluate(
+        mech,
+        orientation=orientation,
+        min_inverse_condition=min_ic,
+        length=length,
+        fixed=fixed,
+        resolution=SLICE_RESOLUTION,
+        return_samples=True,
+        error_estimate=False,
+    )
     pts, inside = ev.samples, ev.inside
     names = mech.pose_names
     axis_label = [f"{symbol(n)} [{'rad' if mech.angular[k] else mech.length_unit}]" for k, n in enumerate(names)]
     extent = None if ev.extent is None else np.where(inside, ev.extent[:, 1] - ev.extent[:, 0], np.nan)
-    return Slice(x=pts[:, i], y=pts[:, j], extent=extent,
-                 inverse_condition=np.where(inside, ev.inverse_conditions, np.nan), inside=inside,
-                 xlabel=axis_label[i], ylabel=axis_label[j],
-                 extent_label=(f"{symbol(names[2])} extent [{mech.length_unit}]" if len(names) > 2
-                               else f"extent [{mech.length_unit}]"),
-                 fixed_label=label, equal_aspect=mech.angular[i] == mech.angular[j])
+    return Slice(
+        x=pts[:, i],
+        y=pts[:, j],
+        extent=extent,
+        inverse_condition=np.where(inside, ev.inverse_conditions, np.nan),
+        inside=inside,
+        xlabel=axis_label[i],
+        ylabel=axis_label[j],
+        extent_label=(
+            f"{symbol(names[2])} extent [{mech.length_unit}]" if len(names) > 2 else f"extent [{mech.length_unit}]"
+        ),
+        fixed_label=label,
+        equal_aspect=mech.angular[i] == mech.angular[j],
+    )
 
 
-def draw_slice(fig: Figure, ax, data: Slice, kind: str, vmin: float | None = None, vmax: float | None = None,
-               colorbar: bool = True):
+def draw_slice(
+    fig: Figure, ax, data: Slice, kind: str, vmin: float | None = None, vmax: float | None = None, colorbar: bool = True
+):
     """Draw ``kind`` ("workspace" or "inverse_condition") of ``data`` on ``ax``; returns the mesh.
 
     ``vmin``/``vmax`` fix the colour scale (one scale for a family of figures).
@@ -180,8 +213,16 @@ def draw_slice(fig: Figure, ax, data: Slice, kind: str, vmin: float | None = Non
     return mesh
 
 
-def plot_workspace(mech: Mechanism, orientation: tuple[float, float], min_ic: float, length: float | None,
-                   directory: Path, what: str, plot=None, design_volume: str = "") -> list[Path]:
+def plot_workspace(
+    mech: Mechanism,
+    orientation: tuple[float, float],
+    min_ic: float,
+    length: float | None,
+    directory: Path,
+    what: str,
+    plot=None,
+    design_volume: str = "",
+) -> list[Path]:
     """``workspace.png`` and ``inverse_condition.png`` of one design on its plot slice.
 
     The title names the slice (the fixed pose variables) and, when given,
@@ -208,8 +249,9 @@ def _cells(ax, x: np.ndarray, y: np.ndarray, values: np.ndarray, cmap, vmin=None
     return ax.pcolormesh(xs, ys, np.ma.masked_invalid(grid), cmap=cmap, vmin=vmin, vmax=vmax, shading="nearest")
 
 
-def plot_front(front: pd.DataFrame, objectives: list[str], path: Path, what: str, plot=None,
-               units: dict[str, str] | None = None) -> Path:
+def plot_front(
+    front: pd.DataFrame, objectives: list[str], path: Path, what: str, plot=None, units: dict[str, str] | None = None
+) -> Path:
     """The non-dominated designs of a Pareto optimiser in the plane of its two objectives
     (``units``: unit of an objective other than "1", e.g. ``{"volume": "cm³·rad"}``)."""
     units = units or {}
@@ -247,8 +289,7 @@ def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
     for ax, name in zip(axes, mechanisms):
         part = mixed[mixed["mechanism"].astype(str) == name]
         stats = part.groupby("w_d")[["gdi", "suri", "objective_value"]].agg(["mean", "min", "max"])
-        for column, label, style in (("gdi", "GDI", "o-"), ("suri", "SURI", "s-"),
-                                     ("objective_value", "η", "^-")):
+        for column, label, style in (("gdi", "GDI", "o-"), ("suri", "SURI", "s-"), ("objective_value", "η", "^-")):
             if len(stats):
                 w = stats.index.to_numpy()
                 ax.plot(w, stats[(column, "mean")], style, label=label, ms=4)
@@ -258,12 +299,10 @@ def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
         ax.set_ylabel("GDI, SURI, η [1]")
         ax.grid(alpha=0.3)
         if len(stats):
-            spread = (f"mean and range over {n_seeds.max()} seeds" if n_seeds.max() > 1
-                      else "one seed per point")
+            spread = f"mean and range over {n_seeds.max()} seeds" if n_seeds.max() > 1 else "one seed per point"
             ax.set_title(f"{name}: GDI, SURI, η of the optima vs $w_d$\n({spread})", fontsize=10)
             ax.legend(loc="best")
         else:  # a sweep of V or GDI alone: say so rather than draw an empty legend
             ax.set_title("the mixed index η versus $w_d$")
-            ax.text(0.5, 0.5, "no mixed-index runs in this sweep", ha="center", va="center",
-                    transform=ax.transAxes)
+            ax.text(0.5, 0.5, "no mixed-index runs in this sweep", ha="center", va="center", transform=ax.transAxes)
     return _save(fig, path, plot)

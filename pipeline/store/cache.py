@@ -68,8 +68,12 @@ def _source_digest() -> str:
     digest.update(repr(sorted(library_versions().items())).encode())
     for package in (kinematics, pipeline):
         root = Path(package.__file__).parent
-        data = [p for pattern in DATA_FILES if pattern.startswith(f"{root.name}/")
-                for p in root.glob(pattern.split("/", 1)[1])]
+        data = [
+            p
+            for pattern in DATA_FILES
+            if pattern.startswith(f"{root.name}/")
+            for p in root.glob(pattern.split("/", 1)[1])
+        ]
         for path in sorted([*root.rglob("*.py"), *data]):
             name = str(path.relative_to(root.parent))
             if name.startswith(DOCUMENT_WRITERS):
@@ -99,8 +103,15 @@ def prune(cache_dir: str | Path, dry_run: bool = False) -> list[tuple[Path, int]
         The removed (or, with ``dry_run``, removable) directories and their sizes.
     """
     root = Path(cache_dir)
-    stale = [d for d in sorted(root.iterdir()) if d.is_dir() and not d.is_symlink()
-             and d.name != CODE_VERSION and _VERSION_DIR.match(d.name)] if root.is_dir() else []
+    stale = (
+        [
+            d
+            for d in sorted(root.iterdir())
+            if d.is_dir() and not d.is_symlink() and d.name != CODE_VERSION and _VERSION_DIR.match(d.name)
+        ]
+        if root.is_dir()
+        else []
+    )
     out = []
     for d in stale:
         size = sum(f.stat().st_size for f in d.rglob("*") if f.is_file() and not f.is_symlink())
@@ -149,8 +160,11 @@ class CheckedStage:
             recorded = _read_record(record)
             if recorded == digest:
                 return value
-            log.warning("%s: cached output failed its checksum (%s); recomputed", self.name,
-                        "no record" if recorded is None else f"recorded {recorded[:12]}, found {digest[:12]}")
+            log.warning(
+                "%s: cached output failed its checksum (%s); recomputed",
+                self.name,
+                "no record" if recorded is None else f"recorded {recorded[:12]}, found {digest[:12]}",
+            )
             value, _ = self.memorized.call(*args, **kwargs)
             digest = hash_value(value)
         _write_record(record, digest)

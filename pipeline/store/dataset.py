@@ -24,8 +24,9 @@ DATASET_TABLES = ("best", "history", "designs", "front", "runs")
 DEFAULT_PURPOSES = ("study", "benchmark")
 
 
-def read_dataset(path: str | Path = "outputs/dataset", table: str = "best",
-                 purposes: tuple[str, ...] | None = DEFAULT_PURPOSES) -> pd.DataFrame:
+def read_dataset(
+    path: str | Path = "outputs/dataset", table: str = "best", purposes: tuple[str, ...] | None = DEFAULT_PURPOSES
+) -> pd.DataFrame:
     """One table of a dataset as a DataFrame, with units in ``df.attrs``.
 
     Parameters
@@ -48,8 +49,10 @@ def read_dataset(path: str | Path = "outputs/dataset", table: str = "best",
     folder = Path(path) / table
     files = sorted(folder.glob("*.parquet")) if folder.is_dir() else []
     if not files:
-        raise ConfigError(f"dataset={str(path)!r} is invalid: no {table} table in it (no runs aggregated yet?); "
-                          f"allowed: a dataset directory (paths.dataset_dir)")
+        raise ConfigError(
+            f"dataset={str(path)!r} is invalid: no {table} table in it (no runs aggregated yet?); "
+            f"allowed: a dataset directory (paths.dataset_dir)"
+        )
     arrow = pq.read_table(folder)
     df = arrow.to_pandas()
     if purposes is not None and "purpose" in df.columns:
@@ -57,6 +60,7 @@ def read_dataset(path: str | Path = "outputs/dataset", table: str = "best",
     schema = pq.read_schema(files[0])
     df.attrs["units"] = {f.name: (f.metadata or {}).get(b"unit", b"").decode() for f in schema}
     df.attrs["descriptions"] = {f.name: (f.metadata or {}).get(b"description", b"").decode() for f in schema}
-    df.attrs["metadata"] = {k.decode(): v.decode() for k, v in (schema.metadata or {}).items()
-                            if k != b"pm_design.config"}
+    df.attrs["metadata"] = {
+        k.decode(): v.decode() for k, v in (schema.metadata or {}).items() if k != b"pm_design.config"
+    }
     return df

@@ -56,8 +56,11 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "w_d": ("1", "weight of the GDI in eta = w_d GDI + (1 - w_d) SURI (seed 000 eq. 36)"),
     "optimizer": ("", "optimiser registry name"),
     "seed": ("", "optimiser seed"),
-    "purpose": ("", "why the run was made: study, debug (+debug presets) or benchmark (dataset only; "
-                    "read_dataset leaves debug runs out unless asked)"),
+    "purpose": (
+        "",
+        "why the run was made: study, debug (+debug presets) or benchmark (dataset only; "
+        "read_dataset leaves debug runs out unless asked)",
+    ),
     "design_id": ("", "index of the sampled design"),
     "generation": ("", "generation (0 = initial population)"),
     "best": ("objective_unit", "best objective value in the population"),
@@ -79,8 +82,10 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "objective_value": ("objective_unit", "value of the run's objective (eta when objective = mixed)"),
     "objective_unit": ("", "unit of objective_value: volume_unit for volume, 1 otherwise"),
     "objective_value_refined": ("objective_unit", "objective at refine_factor x the resolution"),
-    "objective_error": ("objective_unit", "estimated discretisation error of objective_value: "
-                                          "|objective_value_refined - objective_value|"),
+    "objective_error": (
+        "objective_unit",
+        "estimated discretisation error of objective_value: |objective_value_refined - objective_value|",
+    ),
     "volume_refined": ("volume_unit", "V at refine_factor x the resolution"),
     "gdi_refined": ("1", "GDI at refine_factor x the resolution"),
     "resolution": ("", "grid points per sampled axis of the run's evaluations"),
@@ -88,15 +93,26 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "optimizer_value": ("objective_unit", "what the configured optimiser found, before polish"),
     "found_by": ("", "where the reported optimum comes from: the optimiser or its polish step"),
     "polish_improvement": ("objective_unit", "gain of the polish step over the optimiser's result"),
-    "reference_value": ("objective_unit", "reference optimum of the problem: the best of several independent "
-                                          "searches (CMA-ES seeds, DE, dense grid; each polished); null if not run"),
-    "reference_gap": ("1", "(reference_value - objective_value) / reference_value: how far the run stops "
-                           "short of the reference optimum; null if no reference was run"),
-    "reference_error": ("objective_unit", "estimated discretisation error of reference_value (its change at "
-                                          "refine_factor x the resolution)"),
+    "reference_value": (
+        "objective_unit",
+        "reference optimum of the problem: the best of several independent "
+        "searches (CMA-ES seeds, DE, dense grid; each polished); null if not run",
+    ),
+    "reference_gap": (
+        "1",
+        "(reference_value - objective_value) / reference_value: how far the run stops "
+        "short of the reference optimum; null if no reference was run",
+    ),
+    "reference_error": (
+        "objective_unit",
+        "estimated discretisation error of reference_value (its change at refine_factor x the resolution)",
+    ),
     "reference_gap_error": ("1", "(objective_error + reference_error) / reference_value: the error of reference_gap"),
-    "reference_gap_within_error": ("", "reference_gap <= reference_gap_error: the gap is not resolved by the "
-                                       "objective's accuracy; false if no reference was run"),
+    "reference_gap_within_error": (
+        "",
+        "reference_gap <= reference_gap_error: the gap is not resolved by the "
+        "objective's accuracy; false if no reference was run",
+    ),
     "reference_gap_label": ("", "the gap as reported: 'within error (< e %)' or 'g % ± e %'"),
     "reference_found_by": ("", "the search that found the reference optimum and how many searches agree"),
     "reference_evaluations": ("", "objective evaluations of the reference searches (not in n_evaluations)"),
@@ -116,10 +132,16 @@ def git_commit() -> str:
     """Commit of the source checkout ("unknown" outside git), "-dirty" if it has changes."""
     root = Path(__file__).resolve().parent.parent
     try:
-        sha = subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True,
-                             text=True, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=root,
-                               capture_output=True, text=True, check=True).stdout.strip()
+        sha = subprocess.run(
+            ["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True, check=True
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "status", "--porcelain", "--untracked-files=no"],
+            cwd=root,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
     return sha + ("-dirty" if dirty else "")
@@ -132,13 +154,15 @@ def column_unit(name: str, units: dict[str, str] | None = None) -> tuple[str, st
         return units[name], "design variable or mechanism parameter"
     if name in COLUMNS:
         return COLUMNS[name]
-    for suffix, meaning in (("_flat_lower", "lower end of the flat interval"),
-                            ("_flat_upper", "upper end of the flat interval"),
-                            ("_reference", "design of the reference optimum")):
+    for suffix, meaning in (
+        ("_flat_lower", "lower end of the flat interval"),
+        ("_flat_upper", "upper end of the flat interval"),
+        ("_reference", "design of the reference optimum"),
+    ):
         if name.endswith(suffix) and name[: -len(suffix)] in units:
             return units[name[: -len(suffix)]], meaning
     if name.startswith("param_"):
-        stem = name[len("param_"):]
+        stem = name[len("param_") :]
         for unit in PARAM_UNITS:
             if stem.endswith(f"_{unit}"):
                 return unit, f"mechanism constructor parameter {stem[: -len(unit) - 1]} ({unit})"
@@ -228,5 +252,8 @@ def write_bytes(path: Path, data: bytes) -> Path:
 def read_metadata(path: Path) -> dict:
     """``{"config": dict, "version": str, "git_commit": str}`` of a file written here."""
     meta = pq.read_schema(path).metadata or {}
-    return {"config": json.loads(meta[META_CONFIG]) if META_CONFIG in meta else None,
-            "version": meta[META_VERSION].decode(), "git_commit": meta[META_COMMIT].decode()}
+    return {
+        "config": json.loads(meta[META_CONFIG]) if META_CONFIG in meta else None,
+        "version": meta[META_VERSION].decode(),
+        "git_commit": meta[META_COMMIT].decode(),
+    }

@@ -34,9 +34,10 @@ def check_run_dir(run_dir: Path) -> None:
     manifest = read_manifest(run_dir)
     if manifest is not None or any(Path(run_dir).glob("*.parquet")):
         held = manifest.get("run_id", "?") if manifest else "results"
-        raise ConfigError(f"hydra.run.dir={str(run_dir)!r} is invalid: it already holds run {held}; "
-                          f"allowed: a new directory (the default makes one per launch)")
-
+        raise ConfigError(
+            f"hydra.run.dir={str(run_dir)!r} is invalid: it already holds run {held}; "
+            f"allowed: a new directory (the default makes one per launch)"
+        )
 
 
 #: environment variable carrying a sweep's launch id to jobs run in other processes
@@ -58,5 +59,3 @@ def launch_id() -> str:
 @lru_cache(maxsize=1)
 def _process_launch_id() -> str:
     return f"{datetime.now():%Y-%m-%d_%H-%M-%S}_{os.getpid()}_{secrets.token_hex(3)}"
-
-

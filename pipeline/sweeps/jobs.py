@@ -42,8 +42,10 @@ def sweep_jobs(overrides: Sequence[str], config_loader=None) -> list[list[str]]:
         elif override.is_discrete_sweep():
             values[key] = [f"{key}={value}" for value in override.sweep_string_iterator()]
         else:
-            raise ConfigError(f"{key} is invalid: an interval sweep has no list of values; "
-                              f"allowed: a list (a,b,c), range(...) or choice(...)")
+            raise ConfigError(
+                f"{key} is invalid: an interval sweep has no list of values; "
+                f"allowed: a list (a,b,c), range(...) or choice(...)"
+            )
     return [list(job) for job in itertools.product(*values.values())]
 
 
@@ -53,4 +55,4 @@ def batches(jobs: list[list[str]], max_batch_size: int | None) -> list[list[list
         return [jobs]
     if max_batch_size < 1:
         raise ConfigError(f"hydra.sweeper.max_batch_size={max_batch_size} is invalid: allowed >= 1, or null")
-    return [jobs[k:k + max_batch_size] for k in range(0, len(jobs), max_batch_size)]
+    return [jobs[k : k + max_batch_size] for k in range(0, len(jobs), max_batch_size)]

@@ -27,9 +27,10 @@ from __future__ import annotations
 import logging
 import os
 import sys
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Dict, List, Optional, Sequence
+from typing import Optional
 
 from hydra.core.plugins import Plugins
 from hydra.core.utils import JobReturn
@@ -49,7 +50,7 @@ log = logging.getLogger(__name__)
 class CheckedSweeperConf:
     _target_: str = "hydra_plugins.pm_design.checked_sweeper.CheckedSweeper"
     max_batch_size: Optional[int] = None
-    params: Optional[Dict[str, str]] = None
+    params: Optional[dict[str, str]] = None
 
 
 def _fail(message: str, code: int = 2) -> None:
@@ -64,7 +65,7 @@ def job_label(k: int, overrides: Sequence[str]) -> str:
 class CheckedSweeper(Sweeper):
     """See the module docstring. Hydra calls :meth:`setup`, then :meth:`sweep` with the command line's overrides."""
 
-    def __init__(self, max_batch_size: Optional[int] = None, params: Optional[Dict[str, str]] = None) -> None:
+    def __init__(self, max_batch_size: Optional[int] = None, params: Optional[dict[str, str]] = None) -> None:
         super().__init__()
         self.max_batch_size = max_batch_size
         self.params = dict(params or {})
@@ -75,10 +76,11 @@ class CheckedSweeper(Sweeper):
     def setup(self, *, hydra_context: HydraContext, task_function: TaskFunction, config: DictConfig) -> None:
         self.hydra_context = hydra_context
         self.config = config
-        self.launcher = Plugins.instance().instantiate_launcher(hydra_context=hydra_context,
-                                                               task_function=task_function, config=config)
+        self.launcher = Plugins.instance().instantiate_launcher(
+            hydra_context=hydra_context, task_function=task_function, config=config
+        )
 
-    def sweep(self, arguments: List[str]) -> List[Sequence[JobReturn]]:
+    def sweep(self, arguments: list[str]) -> list[Sequence[JobReturn]]:
         from pipeline.store.runs import LAUNCH_ENV, launch_id
 
         # one launch id and one literal sweep dir for every job, also for launchers
@@ -90,8 +92,10 @@ class CheckedSweeper(Sweeper):
                 self.config.hydra.sweep.dir = str(self.config.hydra.sweep.dir)
             sweep_dir = Path(self.config.hydra.sweep.dir)
             if sweep_dir.exists() and any(sweep_dir.iterdir()):
-                _fail(f"hydra.sweep.dir={str(sweep_dir)!r} is invalid: it already holds files; "
-                      f"allowed: a new directory (the default makes one per launch)")
+                _fail(
+                    f"hydra.sweep.dir={str(sweep_dir)!r} is invalid: it already holds files; "
+                    f"allowed: a new directory (the default makes one per launch)"
+                )
             try:
                 jobs = sweep_jobs(declared_overrides(self.params, arguments), self.hydra_context.config_loader)
                 planned = batches(jobs, self.max_batch_size)
@@ -102,7 +106,7 @@ class CheckedSweeper(Sweeper):
             self.validate_batch_is_legal(jobs)  # all of them, before the first batch runs
             sweep_dir.mkdir(parents=True, exist_ok=True)
             OmegaConf.save(self.config, sweep_dir / "multirun.yaml")
-            returns: List[Sequence[JobReturn]] = []
+            returns: list[Sequence[JobReturn]] = []
             first = 0
             for batch in planned:
                 returns.append(self.launcher.launch(batch, initial_job_idx=first))
@@ -166,5 +170,7 @@ def finish_sweep(results: Sequence[JobReturn], sweep_dir: Path, dataset: Path) -
     if failed:
         _fail(f"{summary}; failed: {'; '.join(failed)}", 1)
     log.info("%s; dataset %s", summary, dataset)
-    print(f"sweep: {sweep_dir}\nreport: {sweep_dir / 'report.html'}\n"
-          f"dataset: {dataset} (from pipeline.store import read_dataset; read_dataset({str(dataset)!r}))")
+    print(
+        f"sweep: {sweep_dir}\nreport: {sweep_dir / 'report.html'}\n"
+        f"dataset: {dataset} (from pipeline.store import read_dataset; read_dataset({str(dataset)!r}))"
+    )

@@ -98,8 +98,10 @@ class FiveBar(Mechanism):
         self.l2 = check_positive(owner, "l2", l2)
         self.d = check_positive(owner, "d", d)
         if not self.d < 2.0 * (self.l1 + self.l2):
-            raise ValueError(f"{owner}: parameter 'd' must be below 2 (l1 + l2) = {2 * (self.l1 + self.l2)} mm "
-                             f"(the legs cannot meet); got d={self.d}")
+            raise ValueError(
+                f"{owner}: parameter 'd' must be below 2 (l1 + l2) = {2 * (self.l1 + self.l2)} mm "
+                f"(the legs cannot meet); got d={self.d}"
+            )
         self._params = {"l1": self.l1, "l2": self.l2, "d": self.d}
         #: base joints A_1, A_2 (mm), shape (2, 2)
         self.base = np.array([[-0.5 * self.d, 0.0], [0.5 * self.d, 0.0]])
