@@ -9,6 +9,9 @@ import pytest
 from kinematics import get_mechanism
 from kinematics.workspace import evaluate
 
+#: end-to-end runs, sweeps and subprocesses: the slow tier (`python -m pytest -m slow`)
+pytestmark = pytest.mark.slow
+
 DESIGN = dict(R=200.0, r=50.0, la=200.0, lb=400.0)
 
 

@@ -20,6 +20,9 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
+#: end-to-end runs, sweeps and subprocesses: the slow tier (`python -m pytest -m slow`)
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 TINY = ["+debug=fast", "optimizer.population=4", "optimizer.generations=2"]
 

@@ -24,6 +24,9 @@ from pipeline.optimizers.ga import (
     select,
 )
 
+#: end-to-end runs, sweeps and subprocesses: the slow tier (`python -m pytest -m slow`)
+pytestmark = pytest.mark.slow
+
 LOWER = np.array([-1.0, -2.0, 0.0])
 UPPER = np.array([1.0, 2.0, 5.0])
 PEAK = np.array([0.3, -1.2, 4.1])

@@ -18,6 +18,9 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
+#: end-to-end runs, sweeps and subprocesses: the slow tier (`python -m pytest -m slow`)
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 SWEEP = [
     "+experiment=rpr2_mixed",

@@ -3,8 +3,12 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from pipeline.optimizers.nsga2 import crowding_distance, non_dominated_ranks, nsga2
+
+#: end-to-end runs, sweeps and subprocesses: the slow tier (`python -m pytest -m slow`)
+pytestmark = pytest.mark.slow
 
 
 def brute_force_ranks(values: np.ndarray) -> np.ndarray:

@@ -13,6 +13,9 @@ import pytest
 from pipeline.config import CONFIG_DIR
 from pipeline.store.cache import __version__
 
+#: end-to-end runs, sweeps and subprocesses: the slow tier (`python -m pytest -m slow`)
+pytestmark = pytest.mark.slow
+
 
 def test_configs_are_found_from_the_installed_package():
     # editable install: the top-level conf/ in place; a wheel: the copy setup.py maps into pipeline/conf

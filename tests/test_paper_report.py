@@ -16,6 +16,9 @@ from pipeline.reproduction.paper_report import compare
 from pipeline.reproduction.papers import load_paper, paper_names
 from pipeline.reproduction.readings import H4_PAPER
 
+#: end-to-end runs, sweeps and subprocesses: the slow tier (`python -m pytest -m slow`)
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 
 

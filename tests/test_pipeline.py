@@ -22,6 +22,9 @@ from pipeline.store.cache import cached
 from pipeline.store.parquet import read_metadata
 from pipeline.study import run_study
 
+#: end-to-end runs, sweeps and subprocesses: the slow tier (`python -m pytest -m slow`)
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 CONF = CONFIG_DIR
 EXPERIMENTS = sorted(p.stem for p in (CONF / "experiment").glob("*.yaml"))

@@ -23,6 +23,9 @@ from pipeline.evaluation import DesignEvaluator
 from pipeline.evaluation import pool as pool_module
 from pipeline.evaluation.pool import FitnessPool, fitness_pool, worker_count
 
+#: end-to-end runs, sweeps and subprocesses: the slow tier (`python -m pytest -m slow`)
+pytestmark = pytest.mark.slow
+
 ROOT = Path(__file__).resolve().parents[1]
 
 

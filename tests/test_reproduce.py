@@ -9,6 +9,9 @@ from kinematics import get_mechanism
 from pipeline.reproduction.extensions import _upper_hull
 from pipeline.reproduction.rpr3 import THESIS, thesis_jacobian_program
 
+#: end-to-end runs, sweeps and subprocesses: the slow tier (`python -m pytest -m slow`)
+pytestmark = pytest.mark.slow
+
 PRINTED = np.array(
     [[-0.855658, 0.190268, -0.0903346], [-0.811356, -0.93643, 0.444595], [-0.00522636, -0.0127963, -0.00770599]]
 )

@@ -8,6 +8,9 @@ import pytest
 from kinematics import MECHANISMS
 from pipeline.store.parquet import PARAM_UNITS, column_unit, param_column
 
+#: end-to-end runs, sweeps and subprocesses: the slow tier (`python -m pytest -m slow`)
+pytestmark = pytest.mark.slow
+
 
 def test_a_design_variable_name_has_one_unit_in_every_mechanism():
     units: dict[str, set[str]] = {}
