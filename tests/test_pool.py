@@ -42,7 +42,24 @@ def sleep_for(seconds: float) -> float:
     return seconds
 
 
+#: loky workers this process already had when the running test started (other tests' executors,
+#: e.g. joblib's reusable one, kept alive in the same xdist worker): not the test's to watch
+_PREEXISTING: set[int] = set()
+
+
+@pytest.fixture(autouse=True)
+def _ignore_earlier_workers():
+    _PREEXISTING.clear()
+    _PREEXISTING.update(_all_loky_workers())
+    yield
+
+
 def loky_workers() -> list[int]:
+    """Process ids of the loky workers this process started during the running test."""
+    return [p for p in _all_loky_workers() if p not in _PREEXISTING]
+
+
+def _all_loky_workers() -> list[int]:
     """Process ids of this process's loky workers (its children running loky's worker main)."""
     me = os.getpid()
     kids = Path(f"/proc/{me}/task/{me}/children").read_text().split()

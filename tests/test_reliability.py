@@ -378,7 +378,7 @@ def _start_and_signal(out: Path, sig: int, when: str, extra: list[str]) -> tuple
 @pytest.mark.slow
 def test_item06_ctrl_c_during_evaluate_through_the_cli(tmp_path):
     proc, stderr, manifest = _start_and_signal(
-        tmp_path / "out", signal.SIGINT, "evaluate", ["sample.n=64", "evaluate.resolution=40"]
+        tmp_path / "out", signal.SIGINT, "evaluate", ["sample.n=64", "evaluate.resolution=36"]
     )
     assert proc.returncode == 130, stderr
     assert "Traceback" not in stderr and "SystemError" not in stderr

@@ -56,7 +56,7 @@ import math
 import numpy as np
 
 from kinematics.annuli import two_annuli_area
-from kinematics.base import DesignVariable, Mechanism, check_positive
+from kinematics.base import DesignVariable, FixedParameter, Mechanism, check_positive
 
 
 class FiveBar(Mechanism):
@@ -83,7 +83,8 @@ class FiveBar(Mechanism):
         DesignVariable("l1", 20.0, 60.0, "mm"),
         DesignVariable("l2", 20.0, 60.0, "mm"),
     )
-    default_fixed = {"d": 40.0}
+    #: the fixed base length d (mechanism.fixed.d) and its range; default_fixed derives from it
+    fixed_parameters = (FixedParameter("d", 40.0, 1.0, 1000.0, "mm"),)
     #: 2-D grid: 160 x 160 nodes per evaluation by default
     default_nodes = 160**2
     #: coarsest grid whose V and GDI stay within ~3 % of a fine one (measured in the example's tests)
