@@ -169,6 +169,7 @@ def test_ctrl_c_while_the_pool_is_made_ends_what_was_started(monkeypatch):
 
 def test_a_dead_worker_breaks_one_batch_and_the_next_starts_afresh():
     """A worker killed (e.g. by the OOM killer) between two GA generations."""
+    pool_module.shutdown_pools(kill=True)  # the kept pool is this test's own, not an earlier test's
     designs = np.array([[5.0, 6.0], [4.0, 7.0], [4.5, 6.5], [5.5, 8.0]])
     evaluator = DesignEvaluator(MechanismConfig(name="rpr2"), 24, 2)
     expected = DesignEvaluator(MechanismConfig(name="rpr2"), 24, 1).evaluate(designs)
