@@ -117,7 +117,12 @@ def main_job_times() -> dict[str, float]:
             with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3"):
                 cfg = compose(
                     config_name="config",
-                    overrides=[f"+experiment={experiment}", f"paths.output_dir={tmp}", "plot.enabled=false"],
+                    overrides=[
+                        f"+experiment={experiment}",
+                        f"paths.output_dir={tmp}",
+                        "plot.enabled=false",
+                        "purpose=benchmark",
+                    ],
                 )
             start = time.perf_counter()
             run_study(cfg, Path(tmp) / "run")
