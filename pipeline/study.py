@@ -12,7 +12,8 @@ Run lifecycle and identity
 * ``manifest.json`` is written first with ``status: running`` and rewritten
   *last* (after the figures) with ``complete`` and the timings, or ``failed``
   with a one-line reason, or ``interrupted``. Aggregation takes complete
-  runs only;
+  runs only. Its ``stages`` says, per stage, whether it was ``computed`` or
+  read from the cache (``cached``): the record the reproduction counts;
 * the run id is ``<config_hash>-<launch_id>-<job>-<token>``: the content hash
   of the result config (equal studies share it), the launch and job that ran
   it, and a random token, so different runs never share it even when one
@@ -111,12 +112,13 @@ def run_study(
         "git_commit": git_commit(),
         "started": time.strftime("%Y-%m-%dT%H:%M:%S"),
         "timings": {},
+        "stages": {},
         "files": [],
         "config": config,
     }
     write_text(run_dir / MANIFEST, json.dumps(manifest, indent=1))
     try:
-        paths = _compute(c, run_dir, manifest["timings"])
+        paths = _compute(c, run_dir, manifest["timings"], manifest["stages"])
         manifest.update(
             status="complete", files=sorted(p.name for p in paths.values()), finished=time.strftime("%Y-%m-%dT%H:%M:%S")
         )
@@ -168,14 +170,16 @@ def _write_final_manifest(run_dir: Path, manifest: dict) -> None:
         log.error("manifest of %s not updated to %s: %s", run_dir, manifest["status"], exc.strerror or exc)
 
 
-def _compute(c: Config, run_dir: Path, timings: dict) -> dict[str, Path]:
+def _compute(c: Config, run_dir: Path, timings: dict, stages: dict) -> dict[str, Path]:
     mech, objective, optimizer = c.mechanism, c.objective, c.optimizer
     n_jobs, cache_dir = c.parallel.n_jobs, c.paths.cache_dir
     start = time.perf_counter()
     with parallel_backend(c.parallel):
         t0 = time.perf_counter()
-        designs = _stage("sample", sample_designs, cache_dir, mech.design, c.sample)
-        evaluated = _stage("evaluate", evaluate_designs, cache_dir, mech, c.evaluate.resolution, designs, n_jobs=n_jobs)
+        designs = _stage(stages, "sample", sample_designs, cache_dir, mech.design, c.sample)
+        evaluated = _stage(
+            stages, "evaluate", evaluate_designs, cache_dir, mech, c.evaluate.resolution, designs, n_jobs=n_jobs
+        )
         timings["sample_evaluate"] = time.perf_counter() - t0
         scores = objective_values(objective.name, evaluated[list(EVALUATION_FIELDS)].to_numpy(float), objective.w_d)
         initial = None
@@ -186,6 +190,7 @@ def _compute(c: Config, run_dir: Path, timings: dict) -> dict[str, Path]:
         # the reference optimum is a stage of its own: one per problem, shared by every optimiser and seed
         reference = (
             _stage(
+                stages,
                 "reference",
                 reference_stage,
                 cache_dir,
@@ -199,6 +204,7 @@ def _compute(c: Config, run_dir: Path, timings: dict) -> dict[str, Path]:
             else None
         )
         optimum = _stage(
+            stages,
             "optimise",
             optimise_design,
             cache_dir,
@@ -236,7 +242,7 @@ def _compute(c: Config, run_dir: Path, timings: dict) -> dict[str, Path]:
     }
     if c.plot.enabled:
         t0 = time.perf_counter()
-        paths.update(_plots(c, optimum, run_dir))
+        paths.update(_plots(c, optimum, run_dir, stages))
         timings["plot"] = time.perf_counter() - t0
     timings["total"] = time.perf_counter() - start
     timings["generation_wall_time"] = optimum["wall_time"][-1] if optimum["wall_time"] else 0.0
@@ -284,13 +290,13 @@ def _check_result(evaluated: pd.DataFrame, scores: np.ndarray, best: dict) -> No
         raise RunError("degenerate result: the optimum has no workspace (volume 0)")
 
 
-def _stage(name: str, func, cache_dir: str, *args, **kwargs):
-    """Run a cached stage; one log line says whether it was computed or read from the cache."""
+def _stage(record: dict, name: str, func, cache_dir: str, *args, **kwargs):
+    """Run a cached stage; ``record[name]`` (the manifest's ``stages``) and one log line say
+    whether it was ``computed`` or read from the cache (``cached``; joblib's public
+    ``check_call_in_cache``)."""
     stage = cached(func, cache_dir)
-    if stage.check_call_in_cache(*args, **kwargs):
-        log.info("%s: cached", name)
-    else:
-        log.info("%s: computing", name)
+    record[name] = "cached" if stage.check_call_in_cache(*args, **kwargs) else "computed"
+    log.info("%s: %s", name, "cached" if record[name] == "cached" else "computing")
     return stage(*args, **kwargs)
 
 
@@ -305,9 +311,11 @@ def _with_keys(frame: pd.DataFrame, keys: dict) -> pd.DataFrame:
     return out
 
 
-def _plots(c: Config, optimum: dict, run_dir: Path) -> dict[str, Path]:
+def _plots(c: Config, optimum: dict, run_dir: Path, stages: dict) -> dict[str, Path]:
     """The run's figures: a cached stage (drawn once per result), written into ``run_dir``."""
-    figures = _stage("plot", run_figures, c.paths.cache_dir, c.mechanism, c.objective, c.optimizer, c.plot, optimum)
+    figures = _stage(
+        stages, "plot", run_figures, c.paths.cache_dir, c.mechanism, c.objective, c.optimizer, c.plot, optimum
+    )
     out = {}
     for name, data in figures.items():
         path = write_bytes(run_dir / name, data)

@@ -125,3 +125,21 @@ def test_reproduction_compose_equals_hydras(overrides, tmp_path):
     with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3"):
         theirs = compose(config_name="config", overrides=overrides)
     assert OmegaConf.to_yaml(ours) == OmegaConf.to_yaml(theirs)
+
+
+def test_manifest_records_which_stages_were_computed_and_which_cached(tmp_path):
+    """The structured record the document counts: the manifest's ``stages``, no log text."""
+    import json
+
+    from pipeline.reproduction.driver import Reproduction, computed_stages
+    from pipeline.study import run_study
+
+    r = Reproduction(tmp_path / "doc", tmp_path / "out")
+    cfg = r.compose(["+experiment=rpr2_mixed", *TINY, f"paths.output_dir={tmp_path / 'out'}"])
+    run_study(cfg, tmp_path / "first")
+    run_study(cfg, tmp_path / "second")
+    first = json.loads((tmp_path / "first" / "manifest.json").read_text())["stages"]
+    second = json.loads((tmp_path / "second" / "manifest.json").read_text())["stages"]
+    assert {"sample", "evaluate", "optimise"} <= set(first) and set(first) == set(second)
+    assert set(first.values()) == {"computed"} and set(second.values()) == {"cached"}
+    assert computed_stages(tmp_path / "first") == len(first) and computed_stages(tmp_path / "second") == 0

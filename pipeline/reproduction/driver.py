@@ -13,7 +13,6 @@ paper) only read the dataset and write text and figures.
 from __future__ import annotations
 
 import copy
-import logging
 import re
 import secrets
 import threading
@@ -35,18 +34,6 @@ from pipeline.sweeps import jobs as sweeps
 
 #: studies run side by side (each with one fitness worker): the machine's 2 cores
 STUDY_JOBS = 2
-
-
-class ComputeCounter(logging.Handler):
-    """Counts the stages that computed (cache misses) during the run."""
-
-    def __init__(self) -> None:
-        super().__init__(level=logging.INFO)
-        self.count = 0
-
-    def emit(self, record: logging.LogRecord) -> None:
-        if ": computing" in record.getMessage():
-            self.count += 1
 
 
 def _split(overrides: Sequence[str]) -> tuple[tuple[str, ...], list[str]]:
@@ -72,21 +59,16 @@ def _worker_ready() -> None:
     """
 
 
-def _run_counted(
-    base: DictConfig, values: list[str], run_dir: Path, job: int, overrides: list[str]
-) -> tuple[dict[str, Path], int]:
-    """``run_study`` of ``base`` with ``values`` (in a worker: ``base`` is its own copy), and the
-    number of stages it computed."""
-    counter = ComputeCounter()
-    logger = logging.getLogger("pipeline")
-    level = logger.level
-    logger.setLevel(logging.INFO)
-    logger.addHandler(counter)
-    try:
-        return run_study(with_values(base, values), run_dir, job, overrides), counter.count
-    finally:
-        logger.removeHandler(counter)
-        logger.setLevel(level)
+def _run_in_worker(base: DictConfig, values: list[str], run_dir: Path, job: int, overrides: list[str]) -> None:
+    """``run_study`` of ``base`` with ``values`` (in a worker: ``base`` is its own copy)."""
+    run_study(with_values(base, values), run_dir, job, overrides)
+
+
+def computed_stages(run_dir: Path) -> int:
+    """How many stages the run in ``run_dir`` computed (cache misses), from its manifest's
+    ``stages`` record (:func:`pipeline.study.run_study` writes it; no log text is read)."""
+    manifest = read_manifest(run_dir) or {}
+    return sum(state == "computed" for state in manifest.get("stages", {}).values())
 
 
 def sweep_jobs(params: dict[str, str]) -> list[list[str]]:
@@ -117,7 +99,7 @@ class Reproduction:
         self.figures.mkdir(parents=True, exist_ok=True)
         self.output_dir = output_dir
         self.sections: list[str] = []
-        self.computed = 0  # stages computed (cache misses) by the studies
+        self.computed = 0  # stages computed (cache misses) by the studies, and document computations
         self._bases: dict[tuple[str, ...], DictConfig] = {}  # composed configs by group choices
         root = output_dir / "reproduction" / f"{launch_id()}-{secrets.token_hex(2)}"
         self.runs_dir = root / "runs"
@@ -257,17 +239,16 @@ class Reproduction:
         ]
         if side_by_side == 1:
             self._run_tasks(list(alongside))
-            done = [
-                (run_study(self.compose([*o, *common]), d, k, o), 0)  # counted by main's handler
-                for k, (d, o) in enumerate(specs)
-            ]
+            for k, (run_dir, overrides) in enumerate(specs):
+                run_study(self.compose([*overrides, *common]), run_dir, k, overrides)
         else:
             tasks = []
             for k, (run_dir, overrides) in enumerate(specs):
                 groups, values = _split([*overrides, *common])
-                tasks.append(delayed(_run_counted)(self._base(groups), values, run_dir, k, overrides))
-            done = self._run_tasks([*alongside, *tasks])[len(alongside) :]
-        self.computed += sum(computed for _, computed in done)
+                tasks.append(delayed(_run_in_worker)(self._base(groups), values, run_dir, k, overrides))
+            self._run_tasks([*alongside, *tasks])
+        # the studies' own record of what they computed (their manifests), wherever they ran
+        self.computed += sum(computed_stages(run_dir) for run_dir, _ in specs)
         return [run_dir for run_dir, _ in specs]
 
     def _run_tasks(self, tasks: list) -> list:
@@ -287,7 +268,9 @@ class Reproduction:
         """The calls ``self.memo(func)(*args)`` not yet in the cache, as joblib tasks for
         :meth:`run_experiments` (``alongside``) or :meth:`memo_map`."""
         memo = self.memo(func)
-        return [delayed(memo)(*args) for args in calls if not memo.check_call_in_cache(*args)]
+        tasks = [delayed(memo)(*args) for args in calls if not memo.check_call_in_cache(*args)]
+        self.computed += len(tasks)  # each is a computation (a cache miss) once run
+        return tasks
 
     def memo_map(self, func, calls: Sequence[tuple]) -> list:
         """``[self.memo(func)(*args) for args in calls]``, the calls not yet in the cache computed
