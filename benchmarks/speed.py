@@ -12,8 +12,8 @@ ratio is measured side by side in this one run, on this machine:
 3. cost against the resolution (H4);
 4. the main job (``python -m pipeline +experiment=h4_mixed``) in a fresh
    process: cold (empty stage cache and empty numba cache, so imports and
-   compilation count; with and without the compile-ahead helper), with the
-   kernels compiled, and warm; ``h4_design`` against the paper GA;
+   compilation count), with the kernels compiled, and warm; ``h4_design``
+   against the paper GA;
 5. a sweep of the same small study with 1, 2 and 4 jobs, through the basic
    launcher (jobs one after the other, 2 workers each) and Hydra's joblib
    launcher (2 jobs side by side, 1 worker each);
