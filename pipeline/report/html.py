@@ -147,6 +147,7 @@ def optima_table(best: pd.DataFrame, dirs: dict[str, Path], base: Path) -> str:
         ]
         cells += [_cell(row.get(n)) for n, _ in designs]
         unit = row.get("objective_unit", "")
+        unit = "" if unit in (None, "1") else unit  # a dimensionless index reads "η = 0.2", not "η = 0.2 1"
         value = row["objective_value"]
         cells.append(_cell(f"{symbol(str(row['objective']))} = {value:.6g} {unit}".rstrip(), value))
         cells.append(_cell(f"{row['volume']:.6g} {row.get('volume_unit', '')}", row["volume"]))
