@@ -678,11 +678,11 @@ def _boundary_corrected_sums(
 
 
 @kernels.inline_jit
-def _plane_cut(c, fraction_centroid):
+def _plane_cut(c, fraction_centroid, active, moment):
     """:func:`_cube_fraction` of one cell: slopes ``c`` (d,) in, ``fraction_centroid`` (d + 1,)
-    out (the fraction, then the centroid per axis; 0 along axes of zero slope)."""
+    out (the fraction, then the centroid per axis; 0 along axes of zero slope); ``active``
+    (d, int) and ``moment`` (d,) are scratch (no allocation per cell)."""
     d = c.shape[0]
-    active = np.empty(d, dtype=np.int64)
     n_active = 0
     for j in range(d):
         fraction_centroid[j + 1] = 0.0
@@ -699,7 +699,7 @@ def _plane_cut(c, fraction_centroid):
         scale *= c[active[a]] * (a + 1)  # d! prod c
     volume = 0.0
     integral = 0.0
-    moment = np.zeros(n_active)
+    moment[:n_active] = 0.0
     for corner in range(1 << n_active):
         level = bound
         parity = 0
@@ -710,7 +710,9 @@ def _plane_cut(c, fraction_centroid):
         if level <= 0.0:
             continue
         sign = -1.0 if parity % 2 else 1.0
-        power = level**n_active
+        power = level
+        for _ in range(n_active - 1):  # level**n_active without a call to pow
+            power *= level
         volume += sign * power
         integral += sign * power * level
         for a in range(n_active):
@@ -725,62 +727,99 @@ def _plane_cut(c, fraction_centroid):
             fraction_centroid[active[a] + 1] = min(max(part, -0.5), 0.5)
 
 
+@kernels.inline_jit
+def _cut_cell_value(inside, f0, f1, p, c, near, toward, crossing_values, strides, sizes, cut, active, moment):
+    """The cut cell of node ``p`` (flat index): its inside fraction times the integrands at the
+    centroid of its inside part, ``(fraction f0, fraction f1)`` (:func:`_boundary_corrected_sums`
+    for one node). ``c`` (d,) the slopes ``h / distance`` of its nearest crossing per sampled
+    axis (0: none), ``near`` the axis of the largest, ``toward`` (d,) their directions (+-1) and
+    ``crossing_values`` (d, 2) the integrands there; ``cut``, ``active``, ``moment`` scratch."""
+    _plane_cut(c, cut, active, moment)
+    own = cut[0]
+    along = cut[near + 1]
+    if inside[p]:
+        fraction = own
+    else:
+        fraction = 1.0 - own
+        along = -along * own / (1.0 - own) if own < 1.0 else 0.0
+    sign = int(toward[near])
+    stride = strides[near]
+    if inside[p]:
+        behind = (p // stride) % sizes[near] - sign
+        v0, v1 = f0[p], f1[p]
+        if 0 <= behind < sizes[near] and inside[p - sign * stride]:
+            q = p - sign * stride
+            v0 += along * (f0[p] - f0[q])
+            v1 += along * (f1[p] - f1[q])
+    else:
+        q = p + sign * stride
+        at_crossing = 1.0 / c[near]
+        t = 0.0
+        if at_crossing < 1.0:
+            t = min(max((along - at_crossing) / (1.0 - at_crossing), 0.0), 1.0)
+        x0, x1 = crossing_values[near, 0], crossing_values[near, 1]
+        v0 = x0 + t * (f0[q] - x0)
+        v1 = x1 + t * (f1[q] - x1)
+    return fraction * max(v0, 0.0), fraction * max(v1, 0.0)
+
+
 @kernels.jit
-def _cut_cell_sums(inside, f0, f1, nearest, toward, crossing_values, strides, sizes, max_slope):
-    """Compiled :func:`_boundary_corrected_sums` after the crossings: per node (flat index)
-    ``inside`` (N,), integrands ``f0``, ``f1`` (N,), and per sampled axis k the distance
-    ``nearest`` (d, N) to the nearest crossing in cell units (inf: none), its direction
-    ``toward`` (d, N) and the integrands there ``crossing_values`` (d, 2, N); ``strides`` and
-    ``sizes`` (d,) of the sampled axes in the flat index. Returns the two sums."""
-    d, count = nearest.shape
+def _cut_cell_corrections(
+    inside, f0, f1, node, entry, axis, crossing, value, positions, strides, sizes, steps_of, max_slope
+):
+    """Compiled :func:`_boundary_corrected_sums` after the crossings, sparse: only the nodes
+    next to a crossing are visited. Crossing ``i`` lies on a grid edge along sampled axis
+    ``axis[i]``, at ``crossing[i]`` (unit of the axis), with the integrands ``value[:, i]``
+    there; ``node`` (E,) lists the nodes next to a crossing, grouped (sorted), and ``entry``
+    (E,) the crossing of each: ``i`` when it lies above the node, ``i + M`` when below. Node
+    arrays ``inside``, ``f0``, ``f1`` (N,); ``positions`` (d, .) the faces and nodes per sampled
+    axis, ``strides``, ``sizes`` (d,) of the sampled axes in the flat index, ``steps_of`` (d,)
+    their cell widths. Returns ``sum over cut nodes of (cut cell value - plain node value)``
+    for both integrands: the plain sums plus these are the corrected sums. Per node and axis
+    the nearer of its (up to two) crossings counts, on a tie the one below, as in the numpy
+    path."""
+    m = axis.shape[0]
+    d = strides.shape[0]
+    e = node.shape[0]
+    nearest = np.empty(d)
+    toward = np.empty(d)
+    crossing_values = np.empty((d, 2))
     c = np.empty(d)
     cut = np.empty(d + 1)
+    active = np.empty(d, dtype=np.int64)
+    moment = np.empty(d)
     total0 = 0.0
     total1 = 0.0
-    for p in range(count):
+    a = 0
+    while a < e:
+        p = node[a]
+        for k in range(d):
+            nearest[k] = np.inf
+            toward[k] = -1.0
+        while a < e and node[a] == p:
+            i = entry[a] % m
+            below = entry[a] >= m
+            k = axis[i]
+            here = positions[k, (p // strides[k]) % sizes[k] + 1]
+            dist = (here - crossing[i] if below else crossing[i] - here) / steps_of[k]
+            if dist < nearest[k] or (below and dist == nearest[k]):
+                nearest[k] = dist
+                toward[k] = -1.0 if below else 1.0
+                crossing_values[k, 0], crossing_values[k, 1] = value[0, i], value[1, i]
+            a += 1
         near = -1
         for k in range(d):
-            dist = nearest[k, p]
-            if dist < np.inf:
-                c[k] = min(1.0 / dist, max_slope) if dist > 0.0 else max_slope
+            if nearest[k] < np.inf:
+                c[k] = min(1.0 / nearest[k], max_slope) if nearest[k] > 0.0 else max_slope
                 if near < 0 or c[k] > c[near]:
                     near = k
             else:
                 c[k] = 0.0
-        if near < 0:
-            total0 += f0[p]
-            total1 += f1[p]
-            continue
-        _plane_cut(c, cut)
-        own = cut[0]
-        along = cut[near + 1]
-        if inside[p]:
-            fraction = own
-        else:
-            fraction = 1.0 - own
-            along = -along * own / (1.0 - own) if own < 1.0 else 0.0
-        sign = int(toward[near, p])
-        stride = strides[near]
-        coordinate = (p // stride) % sizes[near]
-        if inside[p]:
-            behind = coordinate - sign
-            has_behind = 0 <= behind < sizes[near] and inside[p - sign * stride]
-            v0, v1 = f0[p], f1[p]
-            if has_behind:
-                q = p - sign * stride
-                v0 += along * (f0[p] - f0[q])
-                v1 += along * (f1[p] - f1[q])
-        else:
-            q = p + sign * stride
-            at_crossing = 1.0 / c[near]
-            t = 0.0
-            if at_crossing < 1.0:
-                t = min(max((along - at_crossing) / (1.0 - at_crossing), 0.0), 1.0)
-            x0, x1 = crossing_values[near, 0, p], crossing_values[near, 1, p]
-            v0 = x0 + t * (f0[q] - x0)
-            v1 = x1 + t * (f1[q] - x1)
-        total0 += fraction * max(v0, 0.0)
-        total1 += fraction * max(v1, 0.0)
+        v0, v1 = _cut_cell_value(
+            inside, f0, f1, p, c, near, toward, crossing_values, strides, sizes, cut, active, moment
+        )
+        total0 += v0 - f0[p]
+        total1 += v1 - f1[p]
     return total0, total1
 
 
@@ -795,10 +834,11 @@ def _boundary_corrected_sums_compiled(
     f1: np.ndarray,
     steps: int,
 ) -> tuple[float, float]:
-    """:func:`_boundary_corrected_sums` with the bookkeeping compiled: the faces to test
-    (:func:`_face_nodes`), the brackets (:func:`_brackets`), the nearest crossing per node and
-    axis (:func:`_nearest_crossings`) and the cut cells (:func:`_cut_cell_sums`) work on flat
-    node indices; the poses are evaluated in one call per bisection step, as in the numpy path."""
+    """:func:`_boundary_corrected_sums` with sparse bookkeeping: the grid edges whose ends
+    differ in membership are found slab by slab (vectorised comparisons of neighbouring layers),
+    only the inside end nodes' faces are evaluated, and the cut cells are summed compiled
+    (:func:`_cut_cell_corrections`) over the nodes next to a crossing only; the poses are
+    evaluated in one call per bisection step, as in the numpy path."""
     shape = inside.shape
     flat_inside = np.ascontiguousarray(inside.ravel())
     f0, f1 = np.ascontiguousarray(f0.ravel()), np.ascontiguousarray(f1.ravel())
@@ -816,125 +856,104 @@ def _boundary_corrected_sums_compiled(
         poses[np.arange(nodes.size), column[axis]] = at
         return poses
 
-    face_axis, face_side, face_node = _face_nodes(flat_inside, strides, sizes)
-    face_state = np.zeros((3, len(sampled), 2, flat_inside.size))  # inside, f0, f1 at the faces
-    if face_node.size:
-        inside_f, weight_f, ic_f, _ = values(
-            poses_of(face_node, face_axis, positions[face_axis, face_side * (sizes[face_axis] + 1)])
-        )
-        for m, fm in enumerate((inside_f,) + _integrands(inside_f, weight_f, ic_f)):
-            face_state[m, face_axis, face_side, face_node] = fm
-    axis, left, right, p_in, p_out, start = _brackets(flat_inside, f0, f1, face_state, strides, sizes, positions)
+    # per sampled axis k the grid as (outer, size, stride) blocks: layer c of axis k is [:, c, :]
+    blocks = [flat_inside.reshape(-1, int(sizes[k]), int(strides[k])) for k in range(len(sampled))]
+
+    def flat(k: int, outer: np.ndarray, coordinate: np.ndarray | int, inner: np.ndarray) -> np.ndarray:
+        return (outer * sizes[k] + coordinate) * strides[k] + inner
+
+    faces = []  # (axis, side, node) of the inside end nodes
+    for k, block in enumerate(blocks):
+        for side, end in ((0, 0), (1, int(sizes[k]) - 1)):
+            outer, inner = np.nonzero(block[:, end, :])
+            faces.append((np.full(outer.size, k), np.full(outer.size, side), flat(k, outer, end, inner)))
+    face_axis, face_side, face_node = (np.concatenate(part) for part in zip(*faces))
+    axis_parts, left_parts, right_parts = [], [], []
+    if face_node.size:  # a face outside the workspace: a crossing on the half edge to it
+        face_inside = values(poses_of(face_node, face_axis, positions[face_axis, face_side * (sizes[face_axis] + 1)]))[
+            0
+        ]
+        out = ~face_inside
+        axis_parts.append(face_axis[out])
+        left_parts.append(np.where(face_side[out] == 0, -1, face_node[out]))
+        right_parts.append(np.where(face_side[out] == 0, face_node[out], -1))
+    for k, block in enumerate(blocks):
+        outer, coordinate, inner = np.nonzero(block[:, :-1, :] != block[:, 1:, :])
+        lower = flat(k, outer, coordinate, inner)
+        axis_parts.append(np.full(lower.size, k))
+        left_parts.append(lower)
+        right_parts.append(lower + strides[k])
+    axis = np.concatenate(axis_parts).astype(np.int64)
+    left = np.concatenate(left_parts).astype(np.int64)
+    right = np.concatenate(right_parts).astype(np.int64)
+    if not axis.size:
+        return float(f0.sum()), float(f1.sum())
+    stride_of = strides[axis]
+    left_in = (left >= 0) & flat_inside[np.maximum(left, 0)]
+    inner_node = np.where(left_in, left, right)
+    coordinate = (inner_node // stride_of) % sizes[axis]
+    p_in = positions[axis, coordinate + 1]
+    # the outside end: the neighbouring node, or the face past the end node
+    p_out = positions[axis, np.where(left_in, coordinate + 2, coordinate)]
     crossing, value = _bisect(
-        values, poses_of(np.where(left >= 0, left, right), axis, p_in), column[axis], p_in, p_out, start, steps
+        values,
+        poses_of(inner_node, axis, p_in),
+        column[axis],
+        p_in,
+        p_out,
+        np.vstack([f0[inner_node], f1[inner_node]]),
+        steps,
     )
-    nearest, toward, crossing_values = _nearest_crossings(
-        axis, left, right, crossing, value, positions, strides, sizes, steps_of, flat_inside.size
+    # the nodes next to a crossing: left of it (the crossing above them), right of it (below)
+    has_left, has_right = left >= 0, right >= 0
+    node = np.concatenate([left[has_left], right[has_right]])
+    entry = np.concatenate([np.nonzero(has_left)[0], np.nonzero(has_right)[0] + axis.size])
+    order = np.argsort(node, kind="stable")
+    correction0, correction1 = _cut_cell_corrections(
+        flat_inside, f0, f1, node[order], entry[order], axis, crossing, value, positions, strides, sizes, steps_of,
+        _MAX_SLOPE,
     )
-    return _cut_cell_sums(flat_inside, f0, f1, nearest, toward, crossing_values, strides, sizes, _MAX_SLOPE)
-
-
-@kernels.jit
-def _face_nodes(inside, strides, sizes):
-    """Inside end nodes (flat index) along each sampled axis, whose face is to be tested:
-    ``(axis, side, node)`` arrays, side 0 the lower face, 1 the upper."""
-    d = strides.shape[0]
-    count = 0
-    for p in range(inside.shape[0]):
-        if inside[p]:
-            for k in range(d):
-                coordinate = (p // strides[k]) % sizes[k]
-                count += (coordinate == 0) + (coordinate == sizes[k] - 1)
-    axis = np.empty(count, dtype=np.int64)
-    side = np.empty(count, dtype=np.int64)
-    node = np.empty(count, dtype=np.int64)
-    i = 0
-    for p in range(inside.shape[0]):
-        if inside[p]:
-            for k in range(d):
-                coordinate = (p // strides[k]) % sizes[k]
-                for s, end in ((0, 0), (1, sizes[k] - 1)):
-                    if coordinate == end:
-                        axis[i], side[i], node[i] = k, s, p
-                        i += 1
-    return axis, side, node
-
-
-@kernels.jit
-def _brackets(inside, f0, f1, face_state, strides, sizes, positions):
-    """Every grid edge (and half edge to a face) whose ends differ in membership: its axis,
-    the node left and right of it (flat index, -1 for a face), the inside and outside end's
-    position along the axis and the integrands ``(2, M)`` at the inside end."""
-    d = strides.shape[0]
-    n = inside.shape[0]
-    count = 0
-    for p in range(n):
-        for k in range(d):
-            coordinate = (p // strides[k]) % sizes[k]
-            if coordinate < sizes[k] - 1 and inside[p] != inside[p + strides[k]]:
-                count += 1
-            if inside[p] and coordinate == 0 and face_state[0, k, 0, p] == 0.0:
-                count += 1
-            if inside[p] and coordinate == sizes[k] - 1 and face_state[0, k, 1, p] == 0.0:
-                count += 1
-    axis = np.empty(count, dtype=np.int64)
-    left = np.empty(count, dtype=np.int64)
-    right = np.empty(count, dtype=np.int64)
-    p_in = np.empty(count)
-    p_out = np.empty(count)
-    start = np.empty((2, count))
-    i = 0
-    for p in range(n):
-        for k in range(d):
-            coordinate = (p // strides[k]) % sizes[k]
-            here = positions[k, coordinate + 1]
-            if inside[p] and coordinate == 0 and face_state[0, k, 0, p] == 0.0:
-                axis[i], left[i], right[i] = k, -1, p
-                p_in[i], p_out[i] = here, positions[k, 0]
-                start[0, i], start[1, i] = f0[p], f1[p]
-                i += 1
-            if coordinate < sizes[k] - 1 and inside[p] != inside[p + strides[k]]:
-                q = p + strides[k]
-                there = positions[k, coordinate + 2]
-                axis[i], left[i], right[i] = k, p, q
-                inner = p if inside[p] else q
-                p_in[i], p_out[i] = (here, there) if inside[p] else (there, here)
-                start[0, i], start[1, i] = f0[inner], f1[inner]
-                i += 1
-            if inside[p] and coordinate == sizes[k] - 1 and face_state[0, k, 1, p] == 0.0:
-                axis[i], left[i], right[i] = k, p, -1
-                p_in[i], p_out[i] = here, positions[k, sizes[k] + 1]
-                start[0, i], start[1, i] = f0[p], f1[p]
-                i += 1
-    return axis, left, right, p_in, p_out, start
-
-
-@kernels.jit
-def _nearest_crossings(axis, left, right, crossing, value, positions, strides, sizes, steps_of, n):
-    """Per node and sampled axis: the distance (cell units) to the nearer of its two crossings
-    (inf: none), its direction (+-1) and the integrands there ``(d, 2, n)``; on a tie the
-    crossing below wins, as in the numpy path."""
-    d = strides.shape[0]
-    nearest = np.full((d, n), np.inf)
-    toward = np.full((d, n), -1.0)
-    values = np.zeros((d, 2, n))
-    for i in range(axis.shape[0]):
-        k = axis[i]
-        for node, sign in ((left[i], 1.0), (right[i], -1.0)):
-            if node < 0:
-                continue
-            coordinate = (node // strides[k]) % sizes[k]
-            dist = sign * (crossing[i] - positions[k, coordinate + 1]) / steps_of[k]
-            if dist < nearest[k, node] or (sign < 0.0 and dist == nearest[k, node]):
-                nearest[k, node] = dist
-                toward[k, node] = sign
-                values[k, 0, node], values[k, 1, node] = value[0, i], value[1, i]
-    return nearest, toward, values
+    return float(f0.sum()) + correction0, float(f1.sum()) + correction1
 
 
 #: the grid of ``method="grid"`` spans the workspace's extent found on a grid of
 #: ``1 / COARSE`` the resolution, widened by one of its cells on each side
 COARSE = 2
+
+
+#: parts per round of :func:`_multisect`
+SECTIONS = 16
+
+
+def _multisect(
+    values: _PointValues,
+    probe: np.ndarray,
+    column: np.ndarray,
+    p_in: np.ndarray,
+    p_out: np.ndarray,
+    rounds: int,
+) -> np.ndarray:
+    """The outermost boundary crossing between an inside (``p_in``) and an outside (``p_out``)
+    value of column ``column`` (per row) of the poses ``probe`` (N, dof), to
+    ``|p_out - p_in| / SECTIONS**rounds``: each round evaluates ``SECTIONS - 1`` evenly spaced
+    points of every row's bracket in one call and keeps the part between the inside point
+    nearest the outside end and its outer neighbour. Fewer calls than bisection (one per 4
+    halvings) for few rows, where a call's fixed cost dominates. Returns the middle of the last
+    bracket (N,)."""
+    rows = probe.shape[0]
+    fractions = np.arange(1, SECTIONS) / SECTIONS
+    probes = np.repeat(probe, SECTIONS - 1, axis=0)
+    rows_of = np.arange(rows * (SECTIONS - 1))
+    columns = np.repeat(column, SECTIONS - 1)
+    for _ in range(rounds):
+        points = p_in[:, None] + fractions[None, :] * (p_out - p_in)[:, None]  # (N, SECTIONS - 1)
+        probes[rows_of, columns] = points.ravel()
+        inside = values(probes)[0].reshape(rows, SECTIONS - 1)
+        # the last inside point (0: p_in itself), counted from p_in
+        last = np.where(inside.any(axis=1), SECTIONS - 1 - np.argmax(inside[:, ::-1], axis=1), 0)
+        width = p_out - p_in
+        p_in, p_out = p_in + width * last / SECTIONS, p_in + width * (last + 1) / SECTIONS
+    return 0.5 * (p_in + p_out)
 
 
 def _occupied_box(
@@ -946,7 +965,7 @@ def _occupied_box(
     exact: int | None,
     box: tuple[np.ndarray, np.ndarray],
     sampled: list[int],
-    steps: int = 12,
+    rounds: int = 3,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The pose box narrowed, along each sampled axis, to the workspace's extent.
 
@@ -959,9 +978,10 @@ def _occupied_box(
     coarse grid lines) and clipped to the box; a workspace in the first or
     last layer keeps that face. Each crossing moves continuously with the
     design (to the bisection's resolution), and so does their minimum: the
-    grid, and the integral, stay continuous: the few extreme edges are bisected
-    ``steps`` times, so that the box moves by no more than ``2**-steps`` of a
-    coarse cell at a time. An empty coarse grid keeps the box.
+    grid, and the integral, stay continuous: the few extreme edges are cut in
+    :data:`SECTIONS` parts ``rounds`` times (:func:`_multisect`, one call per round), so that
+    the box moves by no more than ``SECTIONS**-rounds`` (``2**-12``) of a coarse cell at a
+    time. An empty coarse grid keeps the box.
     """
     coarse = max(resolution // COARSE, 4)
     axes, _ = _grid_axes(mechanism, coarse, orientation, fixed, 0.5, exact, box)
@@ -991,14 +1011,13 @@ def _occupied_box(
                 )
             )
     if jobs:
-        crossing, _ = _bisect(
+        crossing = _multisect(
             values,
             np.vstack([job[2] for job in jobs]),
             np.concatenate([np.full(job[3].size, job[0]) for job in jobs]),
             np.concatenate([job[3] for job in jobs]),
             np.concatenate([job[4] for job in jobs]),
-            np.zeros((0, sum(job[3].size for job in jobs))),
-            steps,
+            rounds,
         )
         start = 0
         for j, side, _, p_in, _ in jobs:
