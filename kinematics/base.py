@@ -264,6 +264,9 @@ class Mechanism(ABC):
     #: grid nodes per evaluation at the default resolution (speed vs. accuracy;
     #: see :func:`kinematics.workspace.default_resolution`)
     default_nodes: ClassVar[int] = 32**3
+    #: the node budget of ``method="grid"`` (None: :attr:`default_nodes`), chosen per mechanism
+    #: from the error-cost curve of docs/accuracy.md (its cells near the boundary cost more)
+    grid_nodes: ClassVar[int | None] = None
     #: coarsest resolution whose volume and GDI stay within about 3 % of a fine
     #: grid (measured in ``tests/test_workspace.py``); the pipeline refuses coarser
     min_resolution: ClassVar[int] = 8

@@ -15,7 +15,7 @@ becomes that check's line, ``"<check>: raised <Type>: <message>"``):
 ``attributes``
     ``name`` (identifier), ``dof``, ``pose_names``, ``angular``, ``length_unit``,
     ``design_variables`` (each with a unit and finite ``lower < upper``),
-    ``default_fixed`` (a dict), ``default_nodes``, ``min_resolution``.
+    ``default_fixed`` (a dict), ``default_nodes``, ``min_resolution``, ``grid_nodes`` (None or int).
 ``build``
     The design box's centre builds with ``default_fixed``; so does every
     design with one variable at a bound and the others at the centre (the
@@ -133,6 +133,9 @@ def _check_attributes(cls: type[Mechanism]) -> list[str]:
         value = getattr(cls, attr, None)
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
             out.append(f"attributes: {attr} must be an integer >= 1; got {value!r}")
+    grid_nodes = getattr(cls, "grid_nodes", None)
+    if grid_nodes is not None and (isinstance(grid_nodes, bool) or not isinstance(grid_nodes, int) or grid_nodes < 1):
+        out.append(f"attributes: grid_nodes must be None or an integer >= 1; got {grid_nodes!r}")
     return out
 
 

@@ -31,10 +31,11 @@ located by bisection, the boundary is taken as the plane through the nearest
 crossing along each axis and the fraction and centroid of the cut cell follow
 in closed form; the integrand of a cut cell is taken at that centroid. Exact
 for a planar boundary and second order for a smooth one, and continuous in the
-design (no step when the boundary crosses a node), but today 4-13x the cost of
-the midpoint count at the same resolution (docs/accuracy.md), so it is not yet
-the default: the pipeline's budgets and speed targets are set for the midpoint
-count. Where a mechanism has an axis along which nothing
+design (no step when the boundary crosses a node), but 3-5x the cost of the
+midpoint count at each mechanism's default (docs/accuracy.md: 2-RPR 1.5x), so it
+is not yet the default: the pipeline's budgets and speed targets are set for
+the midpoint count. Its default resolution is the mechanism's ``grid_nodes``
+budget where set (Tricept, Delta 28^3), else ``default_nodes``. Where a mechanism has an axis along which nothing
 but the actuator range changes (H4: z, since all carriages slide along z and
 the Jacobian of eq. 33 does not depend on z), that axis is integrated exactly
 from the feasible interval
@@ -294,19 +295,24 @@ def sampled_axes(
 
 
 def default_resolution(
-    mechanism: Mechanism, orientation: tuple[float, float] | None = None, fixed: dict[str, float] | None = None
+    mechanism: Mechanism,
+    orientation: tuple[float, float] | None = None,
+    fixed: dict[str, float] | None = None,
+    method: str = "midpoint",
 ) -> int:
-    """Largest resolution whose grid has at most ``mechanism.default_nodes`` nodes.
+    """Largest resolution whose grid has at most ``mechanism.default_nodes`` nodes
+    (``method="grid"``: ``mechanism.grid_nodes`` when the mechanism sets it).
 
-    The node budgets (class attribute of each mechanism) keep a GA run of
-    4,500 evaluations near a minute on 2 workers; with the boundary-refined
-    grid (``method="grid"``) V, GDI and eta are then within 0.1 % of their
-    converged values (benchmarks/accuracy.py, docs/accuracy.md).
+    The node budgets (class attributes of each mechanism) keep a GA run of
+    4,500 evaluations near a minute on 2 workers; the grid method's budgets are
+    where its V, GDI and eta come within about 0.1 % of their converged values
+    on the designs of benchmarks/accuracy.py (docs/accuracy.md).
     """
     if orientation is None:
         orientation = mechanism.default_orientation
     n_axes = max(len(sampled_axes(mechanism, orientation, fixed)), 1)
-    nodes = int(mechanism.default_nodes)
+    budget = mechanism.grid_nodes if method == "grid" else None
+    nodes = int(mechanism.default_nodes if budget is None else budget)
     res = int(round(nodes ** (1.0 / n_axes)))
     while res > 1 and res**n_axes > nodes:
         res -= 1
@@ -910,7 +916,18 @@ def _boundary_corrected_sums_compiled(
     entry = np.concatenate([np.nonzero(has_left)[0], np.nonzero(has_right)[0] + axis.size])
     order = np.argsort(node, kind="stable")
     correction0, correction1 = _cut_cell_corrections(
-        flat_inside, f0, f1, node[order], entry[order], axis, crossing, value, positions, strides, sizes, steps_of,
+        flat_inside,
+        f0,
+        f1,
+        node[order],
+        entry[order],
+        axis,
+        crossing,
+        value,
+        positions,
+        strides,
+        sizes,
+        steps_of,
         _MAX_SLOPE,
     )
     return float(f0.sum()) + correction0, float(f1.sum()) + correction1
@@ -1202,7 +1219,8 @@ def evaluate(
         Grid points per sampled axis (larger is finer; doubling it refines
         every axis). Default :func:`default_resolution`: the node budget
         :attr:`~kinematics.base.Mechanism.default_nodes` spread over the sampled axes (H4 24, Tricept
-        32, 3-RPR 32 over (x, y, phi) or 181 at constant phi, 2-RPR 400).
+        32, 3-RPR 32 over (x, y, phi) or 181 at constant phi, 2-RPR 400); for ``method="grid"``
+        :attr:`~kinematics.base.Mechanism.grid_nodes` where set (Tricept and Delta 28).
     orientation : (float, float), optional
         Range (rad) of every angular pose variable; ``lo == hi`` asks for the
         constant-orientation workspace (the volume is then the measure over
@@ -1217,7 +1235,7 @@ def evaluate(
     method : {"midpoint", "grid", "polar"}
         The plain cell-centre count (default; first order), the grid with
         boundary cells counted by their inside fraction (second order,
-        continuous in the design; 4-13x the cost), or the Tricept paper's
+        continuous in the design; 1.5-5x the cost at the defaults), or the Tricept paper's
         polar boundary search.
     fixed : dict, optional
         Pose variables held at a value (e.g. ``{"z": 0.0}`` for a slice);
@@ -1253,7 +1271,7 @@ def evaluate(
     if unknown:
         raise ValueError(f"fixed names unknown pose variables {sorted(unknown)}; allowed: {mechanism.pose_names}")
     if resolution is None:
-        resolution = default_resolution(mechanism, orientation, fixed)
+        resolution = default_resolution(mechanism, orientation, fixed, method)
     if isinstance(resolution, bool) or not isinstance(resolution, (int, np.integer)) or resolution < 1:
         raise ValueError(f"resolution must be an integer >= 1; got {resolution!r}")
     resolution = int(resolution)
