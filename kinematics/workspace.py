@@ -35,7 +35,7 @@ design (no step when the boundary crosses a node), but 3-5x the cost of the
 midpoint count at each mechanism's default (docs/accuracy.md: 2-RPR 1.5x), so it
 is not yet the default: the pipeline's budgets and speed targets are set for
 the midpoint count. Its default resolution is the mechanism's ``grid_nodes``
-budget where set (Tricept, Delta 28^3), else ``default_nodes``. Where a mechanism has an axis along which nothing
+budget where set (H4 27^3, Tricept 28^3, Delta 26^3), else ``default_nodes``. Where a mechanism has an axis along which nothing
 but the actuator range changes (H4: z, since all carriages slide along z and
 the Jacobian of eq. 33 does not depend on z), that axis is integrated exactly
 from the feasible interval
@@ -325,7 +325,10 @@ class _PointValues:
     The weight is 1, or along an exact axis (H4: z) the length of the pose's
     feasible interval of that axis clipped to the pose box (the pose's value
     in that column is ignored). ``oriented``: the caller guarantees that every
-    angular variable lies in the orientation box (a grid that spans it).
+    angular variable lies in the orientation box (a grid that spans it); assumed
+    for every pose when the box's angular bounds lie in the orientation range
+    (all poses evaluated are in the box: grid nodes, points between them and
+    the box's faces).
     """
 
     def __init__(
@@ -340,6 +343,14 @@ class _PointValues:
         self.mechanism, self.exact, self.box = mechanism, exact, box
         self.orientation, self.min_ic, self.length = orientation, min_ic, length
         self.count = 0  # poses evaluated (the cost of an evaluation)
+        # every pose of the box lies in the orientation range (the box spans at most that range):
+        # the poses this class sees (grid nodes, bisection points between nodes and faces) need
+        # no orientation test
+        angular = np.asarray(mechanism.angular, dtype=bool)
+        self.box_oriented = bool(
+            np.all(np.asarray(box[0])[angular] >= orientation[0])
+            and np.all(np.asarray(box[1])[angular] <= orientation[1])
+        )
 
     def __call__(
         self, poses: np.ndarray, oriented: bool = False, keep_extent: bool = False
@@ -348,11 +359,16 @@ class _PointValues:
         axis: the middle of the feasible interval, when the numpy path needs a pose there)."""
         mechanism, exact, orientation, min_ic = self.mechanism, self.exact, self.orientation, self.min_ic
         self.count += poses.shape[0]
+        oriented = oriented or self.box_oriented
         box_lo, box_hi = self.box
         fused = None
         extent = None
         if exact is None:
             weight = np.ones(poses.shape[0])
+            if oriented:
+                fused_ic = mechanism.reachable_inverse_condition(poses, self.length)
+                if fused_ic is not None:
+                    return _dexterous(fused_ic, min_ic), weight, fused_ic, None
         else:
             fused = mechanism.exact_axis_columns(poses, box_lo[exact], box_hi[exact], self.length)
             if fused is None:
@@ -1220,7 +1236,7 @@ def evaluate(
         every axis). Default :func:`default_resolution`: the node budget
         :attr:`~kinematics.base.Mechanism.default_nodes` spread over the sampled axes (H4 24, Tricept
         32, 3-RPR 32 over (x, y, phi) or 181 at constant phi, 2-RPR 400); for ``method="grid"``
-        :attr:`~kinematics.base.Mechanism.grid_nodes` where set (Tricept and Delta 28).
+        :attr:`~kinematics.base.Mechanism.grid_nodes` where set (H4 27, Tricept 28, Delta 26).
     orientation : (float, float), optional
         Range (rad) of every angular pose variable; ``lo == hi`` asks for the
         constant-orientation workspace (the volume is then the measure over
