@@ -116,3 +116,36 @@ def test_reproduction_figures_that_stand_alone(saved):
     assert "657.5 mm·rad²" in saved[2]._suptitle.get_text()
     for fig in saved:
         check_figure(fig)
+
+
+def test_report_convergence_has_one_panel_per_mechanism(saved):
+    from pipeline.report.figures import convergence_figure
+
+    best = pd.DataFrame(
+        {
+            "run_id": ["a", "b", "c"],
+            "mechanism": ["h4", "h4", "rpr2"],
+            "objective": ["mixed"] * 3,
+            "objective_unit": ["1"] * 3,
+            "w_d": [0.5, 0.5, 0.5],
+            "optimizer": ["cmaes"] * 3,
+            "seed": [0, 1, 0],
+            "reference_value": [0.21, 0.21, np.nan],
+        }
+    )
+    # a restart at generation 2 lowers the generation's best; the curve is the best so far
+    history = pd.DataFrame(
+        {
+            "run_id": ["a"] * 4 + ["b"] * 4 + ["c"] * 4,
+            "generation": list(range(4)) * 3,
+            "best": [0.1, 0.2, 0.15, 0.2, 0.1, 0.19, 0.12, 0.2, 0.7, 0.8, 0.6, 0.8],
+        }
+    )
+    convergence_figure(best, history)
+    (fig,) = saved
+    check_figure(fig)
+    panels = [ax for ax in fig.axes if ax.axison]
+    assert [ax.get_title().split(":")[0] for ax in panels] == ["h4", "rpr2"]
+    h4_mean = panels[0].lines[0].get_ydata()
+    assert list(h4_mean) == pytest.approx([0.1, 0.195, 0.195, 0.2])  # never decreases
+    assert "dashed: reference" in panels[0].get_title() and "dashed" not in panels[1].get_title()

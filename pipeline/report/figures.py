@@ -14,9 +14,11 @@ import logging
 
 import numpy as np
 import pandas as pd
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
 from pipeline.config import DesignSpace, MechanismConfig
-from pipeline.stages.plot import _figure, distinct_seeds, draw_slice, symbol, workspace_slice
+from pipeline.stages.plot import distinct_seeds, draw_slice, symbol, workspace_slice
 
 log = logging.getLogger(__name__)
 
@@ -39,23 +41,31 @@ def caption(row: pd.Series) -> str:
 
 
 def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
-    """Best objective so far against the generation, one line per group: mean and range over
-    distinct seeds, with the group's reference optimum (dashed, where one was run) and the final
-    gap in percent. Best so far, not best per generation: a restarting optimiser (IPOP-CMA-ES)
-    starts each restart from a wide population, whose best drops without anything being lost."""
+    """Best objective so far against the generation, one panel per (objective, mechanism) and one
+    line per group: mean and range over distinct seeds, with the group's reference optimum
+    (dashed, where one was run) and the final gap in percent. Best so far, not best per
+    generation: a restarting optimiser (IPOP-CMA-ES) starts each restart from a wide population,
+    whose best drops without anything being lost. One panel per mechanism because the objective's
+    scale differs between mechanisms (η of a 2-RPR near 0.8, of an H4 near 0.2)."""
     runs = distinct_seeds(best, GROUP_KEYS)
     groups = runs[["run_id", *GROUP_KEYS]].merge(history[["run_id", "generation", "best"]], on="run_id")
     # every objective is maximised (pipeline.objectives)
     groups["best"] = groups.sort_values("generation").groupby("run_id")["best"].cummax()
-    by_objective = sorted(groups["objective"].astype(str).unique())
-    fig, axes = _figure(5.5 * max(len(by_objective), 1), 4, max(len(by_objective), 1))
-    for ax, objective in zip(axes, by_objective):
-        part = groups[groups["objective"].astype(str) == objective]
+    panels = sorted({(str(o), str(m)) for o, m in zip(groups["objective"], groups["mechanism"])})
+    ncols = min(len(panels), 3) or 1
+    nrows = max(-(-len(panels) // ncols), 1)
+    fig = Figure(figsize=(5.0 * ncols, 3.8 * nrows), layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
+    for ax in axes[len(panels) :]:
+        ax.axis("off")
+    for ax, (objective, mechanism) in zip(axes, panels):
+        part = groups[(groups["objective"].astype(str) == objective) & (groups["mechanism"].astype(str) == mechanism)]
         references_drawn = False
         for key, frame in part.groupby(GROUP_KEYS, sort=True):
             stats = frame.groupby("generation")["best"].agg(["mean", "min", "max"])
             n_seeds = frame["run_id"].nunique()
-            label = f"{key[0]}, {key[3]}" + (f", w_d={key[2]:g}" if objective == "mixed" else "")
+            label = f"{key[3]}" + (f", w_d={key[2]:g}" if objective == "mixed" else "")
             label += f" ({n_seeds} seed{'s' if n_seeds > 1 else ''})"
             (line,) = ax.plot(stats.index, stats["mean"], label=label)
             ax.fill_between(stats.index, stats["min"], stats["max"], alpha=0.2, color=line.get_color())
@@ -80,12 +90,12 @@ def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
         unit = best.loc[best["objective"].astype(str) == objective, "objective_unit"].iloc[0]
         ax.set_ylabel(f"{symbol(objective)} [{unit}]")
         ax.set_title(
-            f"convergence of {symbol(objective)}: best so far\n"
-            f"(mean and range over distinct seeds{'; dashed: reference optimum' if references_drawn else ''})",
-            fontsize=10,
+            f"{mechanism}: convergence of {symbol(objective)}, best so far\n"
+            f"(mean and range over distinct seeds{'; dashed: reference' if references_drawn else ''})",
+            fontsize=9,
         )
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7, loc="lower right")
+        ax.legend(fontsize=7, loc="best")
     return png(fig)
 
 
