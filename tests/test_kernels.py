@@ -29,14 +29,25 @@ def both_paths(func):
     return fast, reference
 
 
-CASES = [(name, {}, {}) for name in sorted(PAPER_DESIGNS)] + [
-    ("h4", {"ball_joint_limit": 65.0}, {}),  # joint limit inside the fused H4 kernel
-    ("h4", {"homogenising": "rod"}, {"resolution": 16}),
-    ("h4", {}, {"fixed": {"theta": 0.2}}),  # a slice: fused path with one angle
-    ("h4", {"base": "tracking"}, {"min_inverse_condition": 0.0}),
-    ("tricept", {}, {"method": "polar", "resolution": 12}),
-    ("rpr3", {}, {"orientation": (0.5, 0.5)}),
-]
+CASES = (
+    [(name, {}, {}) for name in sorted(PAPER_DESIGNS)]
+    + [
+        ("h4", {"ball_joint_limit": 65.0}, {}),  # joint limit inside the fused H4 kernel
+        ("h4", {"homogenising": "rod"}, {"resolution": 16}),
+        ("h4", {}, {"fixed": {"theta": 0.2}}),  # a slice: fused path with one angle
+        ("h4", {"base": "tracking"}, {"min_inverse_condition": 0.0}),
+        ("tricept", {}, {"method": "polar", "resolution": 12}),
+        ("rpr3", {}, {"orientation": (0.5, 0.5)}),
+    ]
+    + [
+        # the boundary-fraction grid: bisection, faces, sparse cut cells (compiled) against the numpy
+        # reference of the same steps (small grids: the numpy kernels are slow)
+        *[(name, {}, {"method": "grid", "resolution": 12}) for name in sorted(PAPER_DESIGNS)],
+        ("rpr3", {}, {"method": "grid", "orientation": (0.5, 0.5), "resolution": 48}),
+        ("h4", {}, {"method": "grid", "fixed": {"theta": 0.2}, "resolution": 16}),
+        ("rpr2", {}, {"method": "grid", "resolution": 64, "min_inverse_condition": 0.0}),
+    ]
+)
 
 
 @pytest.mark.parametrize(
