@@ -845,6 +845,33 @@ def _cut_cell_corrections(
     return total0, total1
 
 
+@kernels.jit
+def _cut_edges(inside, strides, sizes):
+    """The grid edges whose two nodes differ in membership: per sampled axis k (flat index
+    ``(outer * sizes[k] + c) * strides[k] + inner``) the edges from layer c to c + 1, as
+    ``(axis, lower node)`` arrays in the order of the axes, then of the lower node. One pass
+    per axis over the nodes, nested loops (no division per node)."""
+    d = strides.shape[0]
+    n = inside.shape[0]
+    count = 0
+    for k in range(d):
+        stride, size = strides[k], sizes[k]
+        for start in range(0, n, size * stride):
+            for p in range(start, start + (size - 1) * stride):
+                count += inside[p] != inside[p + stride]
+    axis = np.empty(count, dtype=np.int64)
+    lower = np.empty(count, dtype=np.int64)
+    i = 0
+    for k in range(d):
+        stride, size = strides[k], sizes[k]
+        for start in range(0, n, size * stride):
+            for p in range(start, start + (size - 1) * stride):
+                if inside[p] != inside[p + stride]:
+                    axis[i], lower[i] = k, p
+                    i += 1
+    return axis, lower
+
+
 def _boundary_corrected_sums_compiled(
     values: _PointValues,
     axes: list[np.ndarray],
@@ -899,12 +926,10 @@ def _boundary_corrected_sums_compiled(
         axis_parts.append(face_axis[out])
         left_parts.append(np.where(face_side[out] == 0, -1, face_node[out]))
         right_parts.append(np.where(face_side[out] == 0, face_node[out], -1))
-    for k, block in enumerate(blocks):
-        outer, coordinate, inner = np.nonzero(block[:, :-1, :] != block[:, 1:, :])
-        lower = flat(k, outer, coordinate, inner)
-        axis_parts.append(np.full(lower.size, k))
-        left_parts.append(lower)
-        right_parts.append(lower + strides[k])
+    edge_axis, lower = _cut_edges(flat_inside, strides, sizes)
+    axis_parts.append(edge_axis)
+    left_parts.append(lower)
+    right_parts.append(lower + strides[edge_axis])
     axis = np.concatenate(axis_parts).astype(np.int64)
     left = np.concatenate(left_parts).astype(np.int64)
     right = np.concatenate(right_parts).astype(np.int64)
@@ -950,7 +975,8 @@ def _boundary_corrected_sums_compiled(
 
 
 #: the grid of ``method="grid"`` spans the workspace's extent found on a grid of
-#: ``1 / COARSE`` the resolution, widened by one of its cells on each side
+#: ``1 / COARSE`` the resolution in 3-D (``1 / COARSE**(3/d)`` with d sampled axes: about 1/8
+#: of the nodes whatever d), widened by one of its cells on each side
 COARSE = 2
 
 
@@ -1004,8 +1030,8 @@ def _occupied_box(
 
     Why: a mechanism's box is a bound from the geometry and the workspace may
     fill a fraction of it (Tricept: c in about 300-650 of 0-926 mm); the grid's
-    cells then go where the workspace is. On a grid of ``resolution // COARSE``
-    the extent along axis j is the lowest / highest boundary crossing along j,
+    cells then go where the workspace is. On a grid of about 1/8 of the nodes
+    (``resolution / COARSE**(3/d)`` per axis, d the sampled axes) the extent along axis j is the lowest / highest boundary crossing along j,
     found by bisecting the edges below the lowest (above the highest) layer of
     inside nodes, widened by one coarse cell (the extreme may lie between
     coarse grid lines) and clipped to the box; a workspace in the first or
@@ -1016,7 +1042,7 @@ def _occupied_box(
     the box moves by no more than ``SECTIONS**-rounds`` (``2**-12``) of a coarse cell at a
     time. An empty coarse grid keeps the box.
     """
-    coarse = max(resolution // COARSE, 4)
+    coarse = max(int(resolution / COARSE ** (3 / len(sampled))), 4)
     axes, _ = _grid_axes(mechanism, coarse, orientation, fixed, 0.5, exact, box)
     shape = tuple(len(a) for a in axes)
     inside = np.concatenate([values(_grid_poses(axes, start, stop))[0] for start, stop in _chunk_bounds(axes)]).reshape(
