@@ -1,8 +1,8 @@
 """pm-design's workflow: Hydra-configured, cached design studies of parallel mechanisms.
 
-Layers, each importing only layers below it (``[tool.importlinter]`` in
-pyproject.toml; ``docs/architecture.md``): cli | reproduction > commands > sweeps >
-report | study > stages > config > evaluation | optimizers | store >
+Six floors, each importing only floors below it (``[tool.importlinter]`` in
+pyproject.toml; ``docs/architecture.md``): cli | reproduction | sweeps (the entry
+points) > report | study > stages > config > evaluation | optimizers | store >
 objectives | errors.
 """
 

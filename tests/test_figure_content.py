@@ -106,7 +106,7 @@ def test_run_and_sweep_figures(tmp_path, saved):
 @pytest.mark.slow  # three reproduction figures at their own resolutions
 def test_reproduction_figures_that_stand_alone(saved):
     from pipeline.reproduction.delta import section_png
-    from pipeline.reproduction.h4 import workspace_pngs
+    from pipeline.reproduction.h4_figures import workspace_pngs
     from pipeline.reproduction.tricept import slices_png
 
     workspace_pngs(6.0, 6.0, 42.0, 145723.0)

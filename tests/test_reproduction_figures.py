@@ -18,7 +18,7 @@ from matplotlib.figure import Figure
 import pipeline.reproduction.rpr3 as rpr3_section
 from kinematics import get_mechanism
 from pipeline.reproduction.extensions import extensions
-from pipeline.reproduction.h4 import h4_sweep
+from pipeline.reproduction.h4_figures import h4_sweep
 from pipeline.reproduction.rpr2 import rpr2
 from tests.test_figure_content import check_figure
 

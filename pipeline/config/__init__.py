@@ -4,12 +4,11 @@ Imports no stage: the stages, the study and the sweeps import this layer.
 """
 
 from pipeline import CONFIG_DIR
+from pipeline.config.mechanism import DesignSpace, MechanismConfig
 from pipeline.config.registry import register_configs
 from pipeline.config.schema import (
     Config,
-    DesignSpace,
     EvaluateConfig,
-    MechanismConfig,
     ObjectiveConfig,
     ParallelConfig,
     PathsConfig,

@@ -4,9 +4,8 @@ The schema is the single description of the config. Each section's
 ``__post_init__`` raises :class:`~pipeline.errors.ConfigError` with one line
 naming the field and what is allowed; :mod:`pipeline.config.validate` checks
 what spans sections and :mod:`pipeline.config.registry` stores the schema and
-the generated group options in Hydra's ConfigStore. Angles in the config are
-degrees; they are converted to radians once, in
-:meth:`MechanismConfig.evaluation_options`.
+the generated group options in Hydra's ConfigStore. The mechanism's section
+(:class:`MechanismConfig`, the largest) is :mod:`pipeline.config.mechanism`.
 """
 
 from __future__ import annotations
@@ -14,18 +13,14 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
-import math
 import re
 from dataclasses import dataclass, field
 from typing import Any, Optional
 
-import numpy as np
 from omegaconf import MISSING
 
-from kinematics import MECHANISMS, resolve_mechanism
-from kinematics.base import Mechanism
-from kinematics.plugins import PluginError
-from pipeline.errors import ConfigError, check, finite
+from pipeline.config.mechanism import MechanismConfig
+from pipeline.errors import check, finite
 from pipeline.objectives import OBJECTIVES
 from pipeline.optimizers.base import MAX_SEED
 
@@ -36,167 +31,6 @@ _PLAIN_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,99}$")
 
 
 # ------------------------------------------------------------------ sections
-@dataclass
-class DesignSpace:
-    """Design variables: names (the class's, in order) and box bounds (design units)."""
-
-    names: list[str] = field(default_factory=list)
-    lower: list[float] = field(default_factory=list)
-    upper: list[float] = field(default_factory=list)
-
-
-@dataclass
-class MechanismConfig:
-    """One mechanism: registry name, fixed constructor parameters, design box, workspace limits.
-
-    ``orientation`` is the range of every angular pose variable in degrees
-    (null: the class's default); ``length`` the homogenising length in the
-    mechanism's length unit (null: the class's default). Empty ``names``,
-    ``lower``, ``upper`` and missing ``fixed`` entries take the class's values.
-    """
-
-    #: registry name of the mechanism class (the group option `mechanism=NAME` sets it)
-    name: str = MISSING
-    #: fixed constructor parameters and paper readings (per mechanism, listed below); missing keys take the class's
-    fixed: dict[str, Any] = field(default_factory=dict)
-    #: design box: `names`, `lower`, `upper` in the design variables' units (empty: the class's)
-    design: DesignSpace = field(default_factory=DesignSpace)
-    #: range [lo, hi] of every angular pose variable, degrees (null: the class's default)
-    orientation: Optional[list[float]] = None
-    #: dexterity limit 1/κ of a workspace pose, [0, 1) (seed 000 Sec. 4.4)
-    min_inverse_condition: float = 0.01
-    #: homogenising length of the Jacobian, mechanism length unit (null: the class's)
-    length: Optional[float] = None
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.name, str) or not (self.name in MECHANISMS or ":" in self.name):
-            check(
-                "mechanism.name",
-                self.name,
-                False,
-                "one of " + ", ".join(MECHANISMS) + ", or 'package.module:Class' with mechanism=path",
-            )
-        try:
-            resolve_mechanism(self.name)
-        except PluginError as exc:
-            raise ConfigError(f"mechanism.name={self.name!r} is invalid: {exc}") from None
-        cls = self.cls
-        expected = [v.name for v in cls.design_variables]
-        d = self.design
-        d.names = list(d.names) or expected
-        check("mechanism.design.names", d.names, d.names == expected, f"{expected}")
-        d.lower = [float(v) for v in (d.lower or [v.lower for v in cls.design_variables])]
-        d.upper = [float(v) for v in (d.upper or [v.upper for v in cls.design_variables])]
-        for key in ("lower", "upper"):
-            values = getattr(d, key)
-            check(f"mechanism.design.{key}", values, len(values) == len(expected), f"{len(expected)} numbers")
-        for name, lo, hi in zip(expected, d.lower, d.upper):
-            check(
-                f"mechanism.design bounds of {name}",
-                [lo, hi],
-                finite(lo) and finite(hi) and lo < hi,
-                "finite numbers with lower < upper",
-            )
-        self.fixed = _checked_fixed(cls, dict(self.fixed))
-        if self.orientation is not None:
-            o = list(self.orientation)
-            check(
-                "mechanism.orientation",
-                o,
-                len(o) == 2 and all(finite(v) for v in o) and -360 <= o[0] <= o[1] <= 360,
-                "null or [lo, hi] in degrees, -360 <= lo <= hi <= 360",
-            )
-            self.orientation = [float(v) for v in o]
-        check(
-            "mechanism.min_inverse_condition",
-            self.min_inverse_condition,
-            finite(self.min_inverse_condition) and 0 <= self.min_inverse_condition < 1,
-            "[0, 1)",
-        )
-        check(
-            "mechanism.length",
-            self.length,
-            self.length is None or (finite(self.length) and self.length > 0),
-            "null or a finite number > 0",
-        )
-        try:
-            self.build(self.centre)
-        except (TypeError, ValueError) as exc:
-            raise ConfigError(f"mechanism.fixed: {exc}") from None
-
-    @property
-    def cls(self) -> type[Mechanism]:
-        """The mechanism class: a registry name or a ``package.module:Class`` path."""
-        return resolve_mechanism(self.name)
-
-    @property
-    def centre(self) -> np.ndarray:
-        return 0.5 * (np.asarray(self.design.lower) + np.asarray(self.design.upper))
-
-    def build(self, design: np.ndarray) -> Mechanism:
-        """The mechanism of one design vector (design units); ValueError if the design is infeasible."""
-        return self.cls.from_design(np.asarray(design, dtype=float), **self.fixed)
-
-    def orientation_rad(self) -> tuple[float, float] | None:
-        """``orientation`` in radians (None: the class's default)."""
-        return None if self.orientation is None else tuple(math.radians(v) for v in self.orientation)
-
-    def evaluation_options(self) -> dict:
-        """Keyword options of :func:`kinematics.workspace.evaluate` (angles in rad)."""
-        options: dict = {"min_inverse_condition": float(self.min_inverse_condition)}
-        if self.orientation is not None:
-            options["orientation"] = self.orientation_rad()
-        if self.length is not None:
-            options["length"] = float(self.length)
-        return options
-
-    @classmethod
-    def for_class(cls, mechanism: type[Mechanism]) -> MechanismConfig:
-        """The default config of a mechanism class (its Hydra group option)."""
-        probe_orientation = None
-        if any(mechanism.angular):
-            lo, hi = _default_orientation(mechanism)
-            probe_orientation = [round(math.degrees(lo), 9), round(math.degrees(hi), 9)]
-        return cls(
-            name=mechanism.name,
-            fixed=dict(mechanism.default_fixed),
-            design=DesignSpace(
-                names=[v.name for v in mechanism.design_variables],
-                lower=[v.lower for v in mechanism.design_variables],
-                upper=[v.upper for v in mechanism.design_variables],
-            ),
-            orientation=probe_orientation,
-        )
-
-
-def _checked_fixed(cls: type[Mechanism], given: dict[str, Any]) -> dict[str, Any]:
-    """The class's defaults updated with ``given``, each value in its declared range or choices.
-
-    The ranges come from the mechanism (``fixed_parameters``, one source);
-    every fixed parameter must be declared there.
-    """
-    declared = {p.name: p for p in cls.fixed_parameters}
-    keys = ", ".join(declared) or "none"
-    for name in given:
-        check(f"mechanism.fixed.{name}", given[name], name in declared, f"keys {keys} for {cls.name}")
-    for name in cls.default_fixed:
-        if name not in declared:
-            raise ConfigError(
-                f"mechanism.fixed.{name} is invalid: {cls.__name__} declares no range for it "
-                f"(kinematics.base.FixedParameter in fixed_parameters); allowed: keys {keys}"
-            )
-    fixed = {**cls.default_fixed, **given}
-    for name, value in fixed.items():
-        p = declared[name]
-        check(f"mechanism.fixed.{name}", value, p.accepts(value), f"{p.allowed()} for {cls.name}")
-    return fixed
-
-
-def _default_orientation(mechanism: type[Mechanism]) -> tuple[float, float]:
-    centre = [0.5 * (v.lower + v.upper) for v in mechanism.design_variables]
-    return mechanism.from_design(np.array(centre), **mechanism.default_fixed).default_orientation
-
-
 @dataclass
 class ObjectiveConfig:
     """The maximised objective (:data:`pipeline.objectives.OBJECTIVES`) and the GDI weight of η."""

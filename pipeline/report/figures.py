@@ -18,7 +18,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from pipeline.config import DesignSpace, MechanismConfig
-from pipeline.stages.plot import distinct_seeds, draw_slice, symbol, workspace_slice
+from pipeline.stages.plot import distinct_seeds
+from pipeline.stages.slices import draw_slice, symbol, workspace_slice
 
 log = logging.getLogger(__name__)
 

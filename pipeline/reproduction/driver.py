@@ -3,7 +3,7 @@
 Each paper table or figure is an experiment (``conf/experiment/*.yaml``)
 that declares its own sweep in ``hydra.sweeper.params``, the same sweep
 ``python -m pipeline -m +experiment=NAME`` runs. :meth:`Reproduction.experiment`
-expands that sweep with the sweeper's own expansion (:func:`pipeline.sweeps.jobs.sweep_jobs`), runs the jobs through
+expands that sweep with the sweeper's own expansion (:func:`pipeline.config.jobs.sweep_jobs`), runs the jobs through
 the cached pipeline (two side by side, one fitness worker each), aggregates
 them into the document's dataset and returns their ``best`` rows read back
 with ``pd.read_parquet`` from that dataset. The sections (one module per
@@ -26,11 +26,11 @@ from joblib import Parallel, delayed
 from omegaconf import DictConfig, OmegaConf, open_dict
 
 from pipeline.config import CONFIG_DIR, register_configs
+from pipeline.config import jobs as sweeps
 from pipeline.stages.aggregate import aggregate
 from pipeline.store.cache import cached
 from pipeline.store.runs import launch_id, read_manifest
 from pipeline.study import run_study
-from pipeline.sweeps import jobs as sweeps
 
 #: studies run side by side (each with one fitness worker): the machine's 2 cores
 STUDY_JOBS = 2

@@ -1,7 +1,7 @@
 """The sweeper of ``python -m pipeline -m``, on Hydra's public ``Sweeper`` plugin interface.
 
 * **every job is validated before the first computes**: the sweep is expanded
-  (:func:`pipeline.sweeps.jobs.sweep_jobs`), each job's config is composed and
+  (:func:`pipeline.config.jobs.sweep_jobs`), each job's config is composed and
   checked (:func:`pipeline.config.validate`); a bad one stops the sweep with
   one line naming the job's overrides and the field, exit 2, nothing written;
   only then are the jobs launched, in batches of ``max_batch_size``;
@@ -40,8 +40,8 @@ from hydra.types import HydraContext, TaskFunction
 from omegaconf import DictConfig, OmegaConf, open_dict
 from omegaconf.errors import OmegaConfBaseException
 
+from pipeline.config.jobs import batches, declared_overrides, sweep_jobs
 from pipeline.errors import ConfigError, RunError
-from pipeline.sweeps.jobs import batches, declared_overrides, sweep_jobs
 
 log = logging.getLogger(__name__)
 

@@ -1,4 +1,5 @@
-"""The jobs of a sweep: Hydra's override grammar expanded into one list of overrides per job.
+"""The jobs of a sweep: Hydra's override grammar expanded into one list of overrides per job (config layer:
+the sweeper of ``-m`` and the reproduction both expand sweeps with it).
 
 The expansion of Hydra's basic sweeper, on Hydra's public override parser:
 each key keeps the position of its first mention and the value of its last

@@ -1,0 +1,116 @@
+"""The one-line check of a run's overrides, before Hydra creates or instantiates anything.
+
+:func:`precheck_overrides` composes the config with Hydra's compose API and
+validates it (a single run), or composes a probe of every swept value (a
+sweep, ``-m``; the sweeper checks every job again). Bad input: one ``error:``
+line, exit 2.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from hydra.errors import HydraException
+from omegaconf import DictConfig
+from omegaconf.errors import OmegaConfBaseException
+
+from pipeline.cli.commands import one_line, suggestion
+from pipeline.config import CONFIG_DIR, guard, register_configs, validate
+from pipeline.errors import ConfigError, check_writable
+from pipeline.store.runs import check_run_dir
+
+#: Hydra flags that print and exit without running the task (nothing to check)
+INFO_FLAGS = (
+    "--help",
+    "-h",
+    "--hydra-help",
+    "--version",
+    "--cfg",
+    "-c",
+    "--resolve",
+    "--package",
+    "-p",
+    "--info",
+    "-i",
+    "--shell-completion",
+    "-sc",
+)
+#: Hydra flags that run the task: the overrides are checked as for a single run
+MULTIRUN_FLAGS = ("-m", "--multirun")
+
+
+def precheck_overrides(argv: list[str]) -> None:
+    """Check the overrides before Hydra creates or instantiates anything (one ``error:`` line, exit 2).
+
+    Single run: composes the config, :func:`validate` it, refuses an
+    unwritable or already used ``hydra.run.dir``. Sweep (``-m``): composes
+    the first job and, one at a time, every value of each swept key (each
+    job is checked again by the sweeper). Both: what the config may
+    instantiate (:mod:`pipeline.config.guard`). Flags that only print
+    (``--help``, ``--cfg``, ...) skip the check; flags that would load config
+    from elsewhere (``--config-dir``, ``--experimental-rerun``, ...) are refused.
+    """
+    flags = [a.split("=", 1)[0] for a in argv if a.startswith("-")]
+    if any(f in INFO_FLAGS for f in flags):
+        return
+    try:
+        unknown = [f for f in flags if f not in MULTIRUN_FLAGS]
+        if unknown:
+            raise ConfigError(
+                f"{unknown[0]} is refused: the config comes from conf/ and +experiment=NAME; "
+                f"allowed flags: {', '.join(MULTIRUN_FLAGS + INFO_FLAGS)}"
+            )
+        overrides = [a for a in argv if not a.startswith("-")]
+        if flags:
+            # each job's values are validated by the sweeper, which names the job
+            for job_overrides in _probe_jobs(overrides):
+                guard.check_hydra_node(_compose(job_overrides).hydra)
+            return
+        _probe_jobs(overrides)  # the keys' check
+        cfg = _compose(overrides)
+        guard.check_hydra_node(cfg.hydra)
+        validate(cfg)
+        run_dir = Path(cfg.hydra.run.dir)
+        check_writable("hydra.run.dir", run_dir)
+        check_run_dir(run_dir)
+    except ConfigError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        sys.exit(2)
+    except (HydraException, OmegaConfBaseException, ValueError) as exc:
+        print(f"error: {one_line(exc)}{suggestion(exc, argv)}", file=sys.stderr)
+        sys.exit(2)
+
+
+def _compose(overrides: list[str]) -> DictConfig:
+    """The config of one job (with Hydra's node), as Hydra's compose API builds it."""
+    from hydra import compose, initialize_config_dir
+
+    register_configs()
+    with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3", job_name="pm-design"):
+        return compose(config_name="config", overrides=list(overrides), return_hydra_config=True)
+
+
+def _probe_jobs(overrides: list[str]) -> list[list[str]]:
+    """Jobs that together hold every override and every swept value: the first job (each sweep
+    at its first value), then each further value of each sweep with the others at their first.
+
+    Every override's key is checked by :func:`pipeline.config.guard.check_override_key` first.
+    A sweep that cannot be listed (an interval, a glob) leaves its key out: the sweeper checks it.
+    """
+    from hydra.core.override_parser.overrides_parser import OverridesParser
+
+    parsed = OverridesParser.create().parse_overrides(overrides)
+    fixed, swept = [], []
+    for o in parsed:
+        guard.check_override_key(o.key_or_group, "" if o.is_sweep_override() else o.get_value_element_as_str())
+        if not o.is_sweep_override():
+            fixed.append(o.input_line)
+        elif o.is_discrete_sweep() and o.value_type.name != "GLOB_CHOICE_SWEEP":
+            swept.append((o.get_key_element(), list(o.sweep_string_iterator())))
+    first = {key: values[0] for key, values in swept if values}
+    jobs = [fixed + [f"{k}={v}" for k, v in first.items()]]
+    for key, values in swept:
+        for value in values[1:]:
+            jobs.append(fixed + [f"{k}={value if k == key else v}" for k, v in first.items()])
+    return jobs
