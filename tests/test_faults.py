@@ -20,45 +20,24 @@ from pathlib import Path
 import pandas as pd
 import pytest
 
+from tests.helpers import (
+    ROOT,
+    TINY,
+    cmdline,
+    files_under,
+    one_error_line,
+    processes_in_session,
+    rpr2_evaluation_source,
+    run_cli,
+    run_python,
+    session_ends,
+    start_cli,
+    start_python,
+    wait_for_run,
+)
+
 #: end-to-end runs, sweeps and subprocesses: the slow tier (`python -m pytest -m slow`)
 pytestmark = pytest.mark.slow
-
-ROOT = Path(__file__).resolve().parents[1]
-TINY = ["+debug=fast", "optimizer.population=4", "optimizer.generations=2"]
-
-
-def interruptible() -> None:
-    """``preexec_fn`` of a child that the test interrupts: Ctrl-C's default action restored.
-
-    Why: a test runner started with SIGINT ignored (in the background of a non-interactive
-    shell, as some CI runners do) passes that on to its children, and a Python started with
-    SIGINT ignored never raises KeyboardInterrupt, so the test would not test the CLI.
-    """
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
-
-
-def run_cli(args: list[str], out: Path, module: str = "pipeline", timeout: float = 300) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", module, *args],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-        env={**os.environ, "PYTHONUNBUFFERED": "1"},
-    )
-
-
-def files_under(path: Path) -> list[Path]:
-    return sorted(p for p in path.rglob("*") if p.is_file()) if path.exists() else []
-
-
-def assert_one_error_line(proc: subprocess.CompletedProcess, pattern: str = "") -> str:
-    err = proc.stderr.strip()
-    assert "Traceback" not in proc.stderr, proc.stderr
-    assert err.startswith("error: ") and "\n" not in err, err
-    if pattern:
-        assert pattern in err, err
-    return err
 
 
 @pytest.fixture(scope="module")
@@ -66,7 +45,7 @@ def existing_run(tmp_path_factory) -> Path:
     """A complete run made through the CLI, to check that nothing replaces it."""
     base = tmp_path_factory.mktemp("existing")
     run_dir = base / "run"
-    proc = run_cli(["+experiment=rpr2_mixed", *TINY, f"paths.output_dir={base}", f"hydra.run.dir={run_dir}"], base)
+    proc = run_cli(["+experiment=rpr2_mixed", *TINY, f"paths.output_dir={base}", f"hydra.run.dir={run_dir}"])
     assert proc.returncode == 0, proc.stderr[-2000:]
     return run_dir
 
@@ -148,9 +127,9 @@ SINGLE_RUN_REFUSALS = [
 )
 def test_single_run_refusal(overrides, field, tmp_path):
     out = tmp_path / "out"
-    proc = run_cli(["+experiment=h4_mixed", f"paths.output_dir={out}", *overrides], out)
+    proc = run_cli(["+experiment=h4_mixed", f"paths.output_dir={out}", *overrides])
     assert proc.returncode == 2, proc.stderr
-    assert_one_error_line(proc, field)
+    one_error_line(proc, field)
     assert files_under(out) == [] and not out.exists(), files_under(out)
 
 
@@ -160,9 +139,9 @@ def test_path_that_is_a_file_is_refused(target, tmp_path):
     blocker.write_text("not a directory")
     out = tmp_path / "out"
     args = [f"paths.output_dir={out}", f"paths.{target}={blocker}/sub"]
-    proc = run_cli(["+experiment=h4_mixed", *TINY, *args], out)
+    proc = run_cli(["+experiment=h4_mixed", *TINY, *args])
     assert proc.returncode == 2
-    assert_one_error_line(proc, f"paths.{target}")
+    one_error_line(proc, f"paths.{target}")
     assert blocker.read_text() == "not a directory" and not out.exists()
 
 
@@ -197,7 +176,7 @@ def test_dask_not_installed_is_one_line(tmp_path):
         timeout=120,
     )
     assert proc.returncode == 2
-    assert_one_error_line(proc, "parallel.backend")
+    one_error_line(proc, "parallel.backend")
     assert not out.exists()
 
 
@@ -210,26 +189,25 @@ def test_reused_run_dir_is_refused_and_kept(existing_run, tmp_path):
             f"paths.output_dir={tmp_path}",
             f"hydra.run.dir={existing_run}",
             "objective.w_d=0.9",
-        ],
-        tmp_path,
+        ]
     )
     assert proc.returncode == 2
-    assert_one_error_line(proc, "hydra.run.dir")
+    one_error_line(proc, "hydra.run.dir")
     assert {p: p.read_bytes() for p in files_under(existing_run)} == before
 
 
 def test_sweep_with_one_bad_job_is_refused_before_any_job_runs(tmp_path):
     out = tmp_path / "out"
-    proc = run_cli(["-m", "+experiment=h4_mixed", *TINY, f"paths.output_dir={out}", "objective.w_d=0,2,1"], out)
+    proc = run_cli(["-m", "+experiment=h4_mixed", *TINY, f"paths.output_dir={out}", "objective.w_d=0,2,1"])
     assert proc.returncode == 2
-    err = assert_one_error_line(proc, "job 1 (")
+    err = one_error_line(proc, "job 1 (")
     assert "objective.w_d=2" in err
     assert files_under(out) == [], files_under(out)
 
 
 def test_sweep_with_an_unknown_option_is_refused_before_any_job_runs(tmp_path):
     out = tmp_path / "out"
-    proc = run_cli(["-m", "+experiment=h4_mixed", *TINY, f"paths.output_dir={out}", "mechanism=h4,stewart"], out)
+    proc = run_cli(["-m", "+experiment=h4_mixed", *TINY, f"paths.output_dir={out}", "mechanism=h4,stewart"])
     assert proc.returncode != 0
     assert "Traceback" not in proc.stderr
     assert not any(p.suffix == ".parquet" for p in files_under(out))
@@ -247,11 +225,10 @@ def test_reused_sweep_dir_is_refused(tmp_path):
             f"paths.output_dir={tmp_path}",
             f"hydra.sweep.dir={sweep}",
             "objective.w_d=0,1",
-        ],
-        tmp_path,
+        ]
     )
     assert proc.returncode == 2
-    assert_one_error_line(proc, "hydra.sweep.dir")
+    one_error_line(proc, "hydra.sweep.dir")
     assert [p.name for p in sweep.iterdir()] == ["old.txt"]
 
 
@@ -271,42 +248,27 @@ def test_aggregate_cli_refusals(args, pattern, code, existing_run, tmp_path):
     foreign.mkdir()
     (foreign / "notes.txt").write_text("mine")
     values = {"missing": tmp_path / "nope", "run": existing_run, "file": file, "foreign": foreign}
-    proc = run_cli([a.format(**values) for a in args], tmp_path, module="pipeline.stages.aggregate")
+    proc = run_cli([a.format(**values) for a in args], module="pipeline.stages.aggregate")
     assert proc.returncode == code
-    assert_one_error_line(proc, pattern)
+    one_error_line(proc, pattern)
     assert file.read_text() == "x" and [p.name for p in foreign.iterdir()] == ["notes.txt"]
 
 
 # ------------------------------------------------- failures while computing
 def test_ctrl_c_stops_with_one_line_and_no_workers_left(tmp_path):
     out = tmp_path / "out"
-    proc = subprocess.Popen(
+    proc = start_cli(
         [
-            sys.executable,
-            "-m",
-            "pipeline",
             "+experiment=h4_mixed",
             f"paths.output_dir={out}",
             "sample.n=8",
             "optimizer.generations=100",
             "plot.enabled=false",
         ],
-        cwd=ROOT,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        start_new_session=True,
-        preexec_fn=interruptible,
-        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+        interrupt=True,
     )
-    deadline = time.time() + 120
-    manifest = None
-    while time.time() < deadline:
-        manifests = list(out.rglob("manifest.json"))
-        if manifests and list((out / "cache").rglob("*.pkl")):  # a stage finished: the GA is running
-            manifest = manifests[0]
-            break
-        time.sleep(0.2)
+    # a stage finished (a cache entry): the GA is running
+    manifest = wait_for_run(out, lambda out: bool(list((out / "cache").rglob("*.pkl"))))
     assert manifest is not None, "the run did not start"
     time.sleep(1.0)
     os.killpg(proc.pid, signal.SIGINT)
@@ -318,7 +280,7 @@ def test_ctrl_c_stops_with_one_line_and_no_workers_left(tmp_path):
     assert json.loads(manifest.read_text())["status"] == "interrupted"
     assert not list(manifest.parent.glob("best.parquet"))
     time.sleep(1.0)
-    assert _processes_in_session(proc.pid) == []
+    assert processes_in_session(proc.pid) == []
 
 
 @pytest.mark.parametrize("delay", [0.0, 0.05, 1.0, 2.0])
@@ -327,27 +289,14 @@ def test_ctrl_c_while_the_workers_start(delay, tmp_path):
     main process is compiling the kernels meanwhile, as on a new machine. Before the
     fixes: a worker's own KeyboardInterrupt traceback (8 runs in 8), and a Ctrl-C that
     landed in llvmlite's compile callback was swallowed and the run went on."""
-    proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "pipeline",
-            "+experiment=h4_mixed",
-            f"paths.output_dir={tmp_path / 'out'}",
-            "sample.n=8",
-            "plot.enabled=false",
-        ],
-        cwd=ROOT,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        start_new_session=True,
-        preexec_fn=interruptible,
+    proc = start_cli(
+        ["+experiment=h4_mixed", f"paths.output_dir={tmp_path / 'out'}", "sample.n=8", "plot.enabled=false"],
         env={**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")},
+        interrupt=True,
     )
     deadline = time.time() + 120
     while time.time() < deadline and not any(
-        b"popen_loky_posix" in _cmdline(pid) for pid in _processes_in_session(proc.pid)
+        b"popen_loky_posix" in cmdline(pid) for pid in processes_in_session(proc.pid)
     ):
         time.sleep(0.005)
     time.sleep(delay)
@@ -356,25 +305,6 @@ def test_ctrl_c_while_the_workers_start(delay, tmp_path):
     assert proc.returncode == 130, stderr
     assert "Traceback" not in stderr and "KeyboardInterrupt" not in stderr, stderr
     assert [ln for ln in stderr.splitlines() if ln.startswith("error:")] == stderr.strip().splitlines()
-
-
-def _cmdline(pid: int) -> bytes:
-    try:
-        return Path(f"/proc/{pid}/cmdline").read_bytes()
-    except OSError:
-        return b""
-
-
-def _processes_in_session(sid: int) -> list[int]:
-    alive = []
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            fields = stat.read_text().rsplit(")", 1)[1].split()
-        except OSError:
-            continue
-        if int(fields[3]) == sid and fields[0] != "Z":  # session id; zombies are already dead
-            alive.append(int(stat.parent.name))
-    return alive
 
 
 def _hydra_main(monkeypatch, argv: list[str]) -> int:
@@ -410,7 +340,7 @@ def test_disk_full_marks_no_run_complete(monkeypatch, tmp_path, capsys):
 
 
 def test_a_job_failing_at_run_time_does_not_lose_the_sweep(monkeypatch, tmp_path, capsys):
-    import pipeline.study as run_module
+    import pipeline.study.compute as run_module
 
     real = run_module.optimise_design
 
@@ -444,20 +374,15 @@ def test_workers_never_see_ctrl_c(tmp_path):
     """
     script = tmp_path / "masks.py"
     script.write_text(
-        "import os, signal, numpy as np\n"
-        "from pipeline import evaluation as objective\nfrom pipeline.evaluation.pool import worker_count\n"
-        "from pipeline.config import MechanismConfig\n"
-        "designs = np.array([[5.0, 6.0], [4.0, 7.0], [4.5, 6.5]])\n"
-        "objective.DesignEvaluator(MechanismConfig(name='rpr2'), 40, 3).evaluate(designs)\n"
+        rpr2_evaluation_source(40, 3) + "import signal\nfrom pipeline.evaluation.pool import worker_count\n"
         "def blocked(pid):\n"
         "    line = next(ln for ln in open(f'/proc/{pid}/status') if ln.startswith('SigBlk:'))\n"
         "    return bool(int(line.split()[1], 16) >> (signal.SIGINT - 1) & 1)\n"
-        "kids = open(f'/proc/{os.getpid()}/task/{os.getpid()}/children').read().split()\n"
-        "pids = [p for p in kids if 'LokyProcess' in open(f'/proc/{p}/cmdline').read()]\n"
+        "pids = loky_pids()\n"
         "print(len(pids) == worker_count(3) - 1, all(blocked(p) for p in pids), "
         "signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, []))\n"
     )
-    proc = subprocess.run([sys.executable, str(script)], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    proc = run_python([str(script)], timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split() == ["True", "True", "False"]
 
@@ -479,7 +404,7 @@ def test_ctrl_c_during_kernel_compilation_is_deferred_not_lost(tmp_path):
         "    print('interrupted after the block', flush=True)\n"
         "print(signal.getsignal(signal.SIGINT) is signal.default_int_handler)\n"
     )
-    proc = subprocess.run([sys.executable, str(script)], cwd=ROOT, capture_output=True, text=True, timeout=60)
+    proc = run_python([str(script)], timeout=60)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split("\n")[:3] == ["block finished", "interrupted after the block", "True"]
 
@@ -491,29 +416,12 @@ def test_workers_of_a_killed_run_exit(tmp_path):
     """
     script = tmp_path / "killed.py"
     script.write_text(
-        "import os, numpy as np\n"
-        "from pipeline import evaluation as objective\n"
-        "from pipeline.config import MechanismConfig\n"
-        "designs = np.array([[5.0, 6.0], [4.0, 7.0], [4.5, 6.5]])\n"
-        "objective.DesignEvaluator(MechanismConfig(name='rpr2'), 40, 2).evaluate(designs)\n"
-        "kids = open(f'/proc/{os.getpid()}/task/{os.getpid()}/children').read().split()\n"
-        "print(os.getpid(), *[p for p in kids if 'LokyProcess' in open(f'/proc/{p}/cmdline').read()], flush=True)\n"
-        "os.kill(os.getpid(), 9)\n"
+        rpr2_evaluation_source(40, 2) + "print(os.getpid(), *loky_pids(), flush=True)\nos.kill(os.getpid(), 9)\n"
     )
     # the workers inherit the pipes, so wait for the process, not for the end of its output
-    proc = subprocess.Popen(
-        [sys.executable, str(script)],
-        cwd=ROOT,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.DEVNULL,
-        text=True,
-        start_new_session=True,
-    )
+    proc = start_python([str(script)], stderr=subprocess.DEVNULL)
     session, *worker_pids = map(int, proc.stdout.readline().split())  # the killed process led its own session
     assert len(worker_pids) == 1  # n_jobs=2: this process and one worker
     assert proc.wait(timeout=120) == -signal.SIGKILL
-    deadline = time.time() + 30
-    while _processes_in_session(session) and time.time() < deadline:
-        time.sleep(0.2)
-    assert _processes_in_session(session) == []
+    assert session_ends(session, seconds=30)
     proc.stdout.close()

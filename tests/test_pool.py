@@ -9,10 +9,7 @@ from __future__ import annotations
 
 import os
 import signal
-import subprocess
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,11 +19,10 @@ from pipeline.config import MechanismConfig
 from pipeline.evaluation import DesignEvaluator
 from pipeline.evaluation import pool as pool_module
 from pipeline.evaluation.pool import FitnessPool, fitness_pool, worker_count
+from tests.helpers import loky_children, rpr2_evaluation_source, run_python, session_ends, start_python, wait_until_dead
 
 #: end-to-end runs, sweeps and subprocesses: the slow tier (`python -m pytest -m slow`)
 pytestmark = pytest.mark.slow
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def scaled(values, factor: float):
@@ -50,41 +46,13 @@ _PREEXISTING: set[int] = set()
 @pytest.fixture(autouse=True)
 def _ignore_earlier_workers():
     _PREEXISTING.clear()
-    _PREEXISTING.update(_all_loky_workers())
+    _PREEXISTING.update(loky_children())
     yield
 
 
 def loky_workers() -> list[int]:
     """Process ids of the loky workers this process started during the running test."""
-    return [p for p in _all_loky_workers() if p not in _PREEXISTING]
-
-
-def _all_loky_workers() -> list[int]:
-    """Process ids of this process's loky workers (its children running loky's worker main)."""
-    me = os.getpid()
-    kids = Path(f"/proc/{me}/task/{me}/children").read_text().split()
-    found = []
-    for pid in kids:
-        try:
-            if "LokyProcess" in Path(f"/proc/{pid}/cmdline").read_text():
-                found.append(int(pid))
-        except OSError:
-            continue
-    return found
-
-
-def alive(pid: int) -> bool:
-    try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
-    except OSError:
-        return False
-
-
-def wait_until_dead(pids: list[int], seconds: float = 30) -> bool:
-    deadline = time.time() + seconds
-    while any(alive(p) for p in pids) and time.time() < deadline:
-        time.sleep(0.1)
-    return not any(alive(p) for p in pids)
+    return [p for p in loky_children() if p not in _PREEXISTING]
 
 
 @pytest.fixture
@@ -192,17 +160,13 @@ def test_worker_count_is_capped_by_the_cores_the_process_may_use(tmp_path):
     assert worker_count(1) == 1 and worker_count(10_000) == max(1, worker_count(10_000)) <= (os.cpu_count() or 1)
     script = tmp_path / "one_core.py"
     script.write_text(
-        "import logging, os, numpy as np\n"
+        "import logging, os\n"
         "logging.basicConfig(level=logging.INFO)\n"
         "os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})\n"
-        "from pipeline.evaluation import DesignEvaluator\n"
-        "from pipeline.config import MechanismConfig\n"
-        "designs = np.array([[5.0, 6.0], [4.0, 7.0], [4.5, 6.5]])\n"
-        "DesignEvaluator(MechanismConfig(name='rpr2'), 24, 4).evaluate(designs)\n"
-        "kids = open(f'/proc/{os.getpid()}/task/{os.getpid()}/children').read().split()\n"
-        "print(sum('LokyProcess' in open(f'/proc/{p}/cmdline').read() for p in kids))\n"
+        + rpr2_evaluation_source(24, 4)
+        + "print(len(loky_pids()))\n"
     )
-    proc = subprocess.run([sys.executable, str(script)], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    proc = run_python([str(script)], timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split() == ["0"]
     assert "parallel.n_jobs=4 capped at 1" in proc.stderr
@@ -210,37 +174,10 @@ def test_worker_count_is_capped_by_the_cores_the_process_may_use(tmp_path):
 
 def test_a_process_with_an_open_pool_exits_and_leaves_no_worker(tmp_path):
     script = tmp_path / "exits.py"
-    script.write_text(
-        "import numpy as np\n"
-        "from pipeline.evaluation import DesignEvaluator\n"
-        "from pipeline.config import MechanismConfig\n"
-        "designs = np.array([[5.0, 6.0], [4.0, 7.0]])\n"
-        "print(DesignEvaluator(MechanismConfig(name='rpr2'), 24, 2).evaluate(designs).shape, flush=True)\n"
-    )
-    proc = subprocess.Popen(
-        [sys.executable, str(script)],
-        cwd=ROOT,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        start_new_session=True,
-    )
+    script.write_text(rpr2_evaluation_source(24, 2, designs=2) + "print(table.shape, flush=True)\n")
+    proc = start_python([str(script)])
     out, err = proc.communicate(timeout=120)
     assert proc.returncode == 0, err
     assert out.strip().startswith("(2, ")
 
-    def in_session() -> list[str]:
-        found = []
-        for stat in Path("/proc").glob("[0-9]*/stat"):
-            try:
-                fields = stat.read_text().rsplit(")", 1)[1].split()
-            except OSError:
-                continue
-            if fields[3] == str(proc.pid) and fields[0] != "Z":  # its session; zombies are already dead
-                found.append(stat.parent.name)
-        return found
-
-    deadline = time.time() + 10  # loky's resource tracker ends just after the process
-    while in_session() and time.time() < deadline:
-        time.sleep(0.1)
-    assert in_session() == []
+    assert session_ends(proc.pid, seconds=10)  # loky's resource tracker ends just after the process

@@ -13,7 +13,6 @@ import os
 import shutil
 import signal
 import subprocess
-import sys
 import textwrap
 import time
 import tomllib
@@ -32,35 +31,7 @@ from pipeline.config import CONFIG_DIR, ConfigError, guard, register_configs
 from pipeline.errors import RunError, interrupt_in
 from pipeline.stages.aggregate import aggregate
 from pipeline.store.checksums import REGISTRY
-
-ROOT = Path(__file__).resolve().parents[1]
-TINY = ["+debug=fast", "optimizer.population=4", "optimizer.generations=2"]
-ENV = {**os.environ, "PYTHONUNBUFFERED": "1"}
-
-
-def cli(args: list[str], timeout: float = 300, **kwargs) -> subprocess.CompletedProcess:
-    return subprocess.run(
-        [sys.executable, "-m", "pipeline", *args],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-        env=ENV,
-        **kwargs,
-    )
-
-
-def one_error_line(proc: subprocess.CompletedProcess, *fragments: str) -> str:
-    err = proc.stderr.strip()
-    assert "Traceback" not in proc.stderr, proc.stderr
-    assert err.startswith("error: ") and "\n" not in err, err
-    for fragment in fragments:
-        assert fragment in err, err
-    return err
-
-
-def files_under(path: Path) -> list[Path]:
-    return sorted(p for p in path.rglob("*") if p.is_file()) if path.exists() else []
+from tests.helpers import ROOT, TINY, files_under, one_error_line, run_cli, run_python, start_cli, wait_for_run
 
 
 def compose_cfg(*overrides: str, hydra: bool = False):
@@ -155,7 +126,7 @@ def test_a_good_sweep_passes_the_precheck(tmp_path, capsys):
 @pytest.mark.parametrize("value", ["1e300", "1e-300", "abc", "nan", "-100", "inf", "true"])
 def test_item01_02_fixed_values_are_refused_naming_key_and_range(value, tmp_path):
     out = tmp_path / "out"
-    proc = cli([f"mechanism.fixed.stroke={value}", f"paths.output_dir={out}"], timeout=120)
+    proc = run_cli([f"mechanism.fixed.stroke={value}", f"paths.output_dir={out}"], timeout=120)
     assert proc.returncode == 2
     one_error_line(proc, "mechanism.fixed.stroke=", "allowed a number in [1, 1000] cm")
     assert files_under(out) == []
@@ -175,7 +146,7 @@ def test_item01_every_fixed_parameter_is_declared_with_range_and_default(name):
 
 
 def test_item01_a_non_finite_result_is_never_complete(monkeypatch, tmp_path):
-    import pipeline.study as study
+    import pipeline.study.compute as study
 
     real = study.objective_values
     monkeypatch.setattr(study, "objective_values", lambda *a: np.full_like(real(*a), np.nan))
@@ -188,7 +159,7 @@ def test_item01_a_non_finite_result_is_never_complete(monkeypatch, tmp_path):
 
 
 def test_item01_an_optimum_without_workspace_is_never_complete(monkeypatch, tmp_path):
-    import pipeline.study as study
+    import pipeline.study.compute as study
 
     real = study.optimise_design
 
@@ -217,7 +188,7 @@ def test_item01_an_optimum_without_workspace_is_never_complete(monkeypatch, tmp_
 )
 def test_item03_a_bad_override_under_multirun_is_one_line_exit_2(overrides, fragment, tmp_path):
     out = tmp_path / "out"
-    proc = cli(["-m", *overrides, f"paths.output_dir={out}"], timeout=120)
+    proc = run_cli(["-m", *overrides, f"paths.output_dir={out}"], timeout=120)
     assert proc.returncode == 2
     one_error_line(proc, fragment)
     assert files_under(out) == []
@@ -242,21 +213,8 @@ runpy.run_module("pipeline", run_name="__main__")
 def test_item04_disk_full_while_hydra_saves_its_config_is_one_line_exit_1(tmp_path):
     out = tmp_path / "out"
     script = FULL_DISK.format(where=".hydra", extra="")
-    proc = subprocess.run(
-        [
-            sys.executable,
-            "-c",
-            script,
-            "+experiment=rpr2_mixed",
-            *TINY,
-            f"paths.output_dir={out}",
-            f"hydra.run.dir={out}/run",
-        ],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env=ENV,
+    proc = run_python(
+        ["-c", script, "+experiment=rpr2_mixed", *TINY, f"paths.output_dir={out}", f"hydra.run.dir={out}/run"]
     )
     assert proc.returncode == 1
     one_error_line(proc, "No space left on device", ".hydra")
@@ -282,21 +240,8 @@ def test_item04_disk_full_during_the_run_ends_failed_with_one_line_naming_the_pl
     """)
     script = FULL_DISK.format(where="pm-design.log", extra=extra)
     run_dir = out / "run"
-    proc = subprocess.run(
-        [
-            sys.executable,
-            "-c",
-            script,
-            "+experiment=rpr2_mixed",
-            *TINY,
-            f"paths.output_dir={out}",
-            f"hydra.run.dir={run_dir}",
-        ],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env=ENV,
+    proc = run_python(
+        ["-c", script, "+experiment=rpr2_mixed", *TINY, f"paths.output_dir={out}", f"hydra.run.dir={run_dir}"]
     )
     assert proc.returncode == 1, proc.stderr[-3000:]
     assert "Logging error" not in proc.stderr and "Traceback" not in proc.stderr, proc.stderr[-3000:]
@@ -326,7 +271,7 @@ def test_item06_an_interrupt_inside_compiled_code_is_an_interrupt():
 
 
 def test_item06_ctrl_c_during_evaluate_marks_the_run_interrupted(monkeypatch, tmp_path):
-    import pipeline.study as study
+    import pipeline.study.compute as study
 
     def ctrl_c_in_numba(*args, **kwargs):
         try:
@@ -344,30 +289,13 @@ def test_item06_ctrl_c_during_evaluate_marks_the_run_interrupted(monkeypatch, tm
 
 
 def _start_and_signal(out: Path, sig: int, when: str, extra: list[str]) -> tuple[subprocess.Popen, str, Path]:
-    proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "pipeline",
-            "+experiment=h4_mixed",
-            f"paths.output_dir={out}",
-            "plot.enabled=false",
-            *extra,
-        ],
-        cwd=ROOT,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        start_new_session=True,
-        env=ENV,
-    )
-    deadline, manifest = time.time() + 180, None
-    while time.time() < deadline and manifest is None:
-        found = list(out.rglob("manifest.json"))
+    proc = start_cli(["+experiment=h4_mixed", f"paths.output_dir={out}", "plot.enabled=false", *extra])
+
+    def ready(out: Path) -> bool:
         logs = list(out.rglob("pm-design.log"))
-        if found and (when == "start" or (logs and "evaluate: computing" in logs[0].read_text())):
-            manifest = found[0]
-        time.sleep(0.05)
+        return when == "start" or bool(logs and "evaluate: computing" in logs[0].read_text())
+
+    manifest = wait_for_run(out, ready, seconds=180, poll=0.05)
     assert manifest is not None, "the run did not start"
     time.sleep(0.5)
     os.killpg(proc.pid, sig) if sig == signal.SIGINT else proc.send_signal(sig)
@@ -450,12 +378,8 @@ def test_item10_a_manifest_without_run_id_is_skipped_and_the_others_added(one_ru
     (bad / "manifest.json").write_text(json.dumps(manifest))
     report = aggregate(sweep, tmp_path / "dataset")
     assert len(report.added) == 1 and "manifest lacks run_id" in report.skipped[0]
-    proc = subprocess.run(
-        [sys.executable, "-m", "pipeline.stages.aggregate", str(sweep), "--dataset", str(tmp_path / "dataset2")],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=120,
+    proc = run_cli(
+        [str(sweep), "--dataset", str(tmp_path / "dataset2")], module="pipeline.stages.aggregate", timeout=120
     )
     assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr
     assert json.loads(proc.stdout)["added"] == 1
@@ -631,7 +555,7 @@ def test_item16_callbacks_from_the_command_line_run_nothing(tmp_path):
         ["+hydra.callbacks.x._target_=builtins.open", f"+hydra.callbacks.x.file={victim}", "+hydra.callbacks.x.mode=w"],
     ):
         for flags in ([], ["-m"]):
-            proc = cli([*flags, *args, f"paths.output_dir={out}"], timeout=120)
+            proc = run_cli([*flags, *args, f"paths.output_dir={out}"], timeout=120)
             assert proc.returncode == 2
             one_error_line(proc, "hydra.callbacks")
     assert victim.read_text() == "keep" and not (tmp_path / "copy.txt").exists()
@@ -648,7 +572,7 @@ def test_item16_callbacks_from_the_command_line_run_nothing(tmp_path):
     ],
 )
 def test_item16_no_target_anywhere_under_hydra(override, tmp_path):
-    proc = cli([override, f"paths.output_dir={tmp_path / 'out'}"], timeout=120)
+    proc = run_cli([override, f"paths.output_dir={tmp_path / 'out'}"], timeout=120)
     assert proc.returncode == 2
     one_error_line(proc, "is refused")
 
@@ -677,7 +601,7 @@ def test_item17_env_set_pythonpath_plants_nothing(tmp_path):
     (planted / "sitecustomize.py").write_text(f"open({str(marker)!r}, 'w').write('ran')\n")
     out = tmp_path / "out"
     for flags in ([], ["-m"]):
-        proc = cli(
+        proc = run_cli(
             [
                 *flags,
                 "+experiment=rpr2_mixed",
