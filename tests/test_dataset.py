@@ -13,7 +13,7 @@ import pyarrow.parquet as pq
 import pytest
 from hydra import compose, initialize_config_dir
 
-import pipeline.stages.aggregate as aggregate_module
+import pipeline.stages.dataset_build as build_module  # where the dataset files are written
 from pipeline.config import CONFIG_DIR, register_configs
 from pipeline.errors import RunError
 from pipeline.stages.aggregate import aggregate
@@ -125,7 +125,7 @@ def test_a_failure_midway_leaves_the_previous_dataset_intact(tmp_path, monkeypat
     before = snapshot(dataset)
     make_run(tmp_path / "s2" / "0", tmp_path, "+experiment=h4_mixed")  # new columns: a schema change
     calls = {"n": 0}
-    real = aggregate_module.write_table
+    real = build_module.write_table
 
     def failing(*args, **kwargs):
         calls["n"] += 1
@@ -133,14 +133,14 @@ def test_a_failure_midway_leaves_the_previous_dataset_intact(tmp_path, monkeypat
             raise RunError("cannot write: no space left on device")
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(aggregate_module, "write_table", failing)
+    monkeypatch.setattr(build_module, "write_table", failing)
     with pytest.raises(RunError):
         aggregate(tmp_path / "s2", dataset)
     assert snapshot(dataset) == before
     assert not [
         p for p in tmp_path.iterdir() if p.name.startswith(".dataset.") and not p.name.endswith(".lock")
     ]  # no staging left
-    monkeypatch.setattr(aggregate_module, "write_table", real)
+    monkeypatch.setattr(build_module, "write_table", real)
     aggregate(tmp_path / "s2", dataset)
     best = pd.read_parquet(dataset / "best")
     assert sorted(best["mechanism"]) == ["h4", "rpr2"] and {"q_min", "d_ratio"} <= set(best.columns)
