@@ -188,9 +188,10 @@ where it is:
 is not the default of `evaluate` or of the pipeline. Next steps: a compiled
 constraint margin per mechanism (actuator and joint-limit slacks) to place each reachability
 crossing by one secant step instead of 4 bisections (which would also make every crossing
-continuous), and reusing the coarse pass. (2) 3-RPR's thin features (above). (3) The pipeline
-does not yet store the error bars with each optimum: `Evaluation.volume_error`, `gdi_error`
-and `mixed_error(w_d)` are there for it.
+continuous), and reusing the coarse pass. (2) 3-RPR's thin features (above). (3) Error bars in the pipeline come from the default method: each optimum carries
+`objective_error` (its change at `refine_factor` x the resolution, in `best.parquet` and the
+dataset), and a gap smaller than its error is reported as within error;
+`Evaluation.volume_error`, `gdi_error` and `mixed_error(w_d)` give the same for the grid method.
 """
 
 
