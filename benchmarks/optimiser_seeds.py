@@ -27,7 +27,7 @@ import time
 
 import numpy as np
 
-from benchmarks.best_known import PROBLEMS, REFINE_FACTOR, default_resolution_of, load, make_problem, save
+from benchmarks.best_known import PROBLEMS, adopt, load, make_problem, refined_value
 from pipeline.optimizers.cmaes import CMAES, CMAESConfig
 from pipeline.optimizers.ga import GA, GAConfig
 from pipeline.optimizers.polish import polish
@@ -35,10 +35,6 @@ from pipeline.stages.optimise import reference_columns
 
 TOLERANCE = 1e-3
 MAX_EVALUATIONS = 1000
-
-
-def refined_value(name: str, x: np.ndarray) -> float:
-    return float(make_problem(name, 1, default_resolution_of(name, x) * REFINE_FACTOR)(x[None])[0])
 
 
 def main() -> None:
@@ -64,18 +60,8 @@ def main() -> None:
             gap = (best - polished.fun) / scale
             runs.append((seed, polished.fun, gap, problem.n_evaluations, polished.x))
         top = max(runs, key=lambda r: r[1])
-        if top[1] > best:  # a seed beat the golden value: it becomes the best known (and is written back)
-            refined = refined_value(name, top[4])
-            ref = golden[name] = {
-                **ref,
-                "value": top[1],
-                "design": dict(zip(ref["design"], map(float, top[4]))),
-                "found_by": f"cmaes seed {top[0]} + polish (benchmarks.optimiser_seeds)",
-                "value_refined": refined,
-                "error": abs(refined - top[1]),
-                "relative_error": abs(refined - top[1]) / abs(top[1]),
-            }
-            save(golden)
+        if adopt(golden, name, top[1], top[4], f"cmaes seed {top[0]} + polish (benchmarks.optimiser_seeds)"):
+            ref = golden[name]
             best, scale = ref["value"], abs(ref["value"])
             tolerance = max(TOLERANCE, ref["relative_error"])
             runs = [(seed, value, (best - value) / scale, n_eval, x) for seed, value, _, n_eval, x in runs]
