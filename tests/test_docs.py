@@ -19,3 +19,19 @@ def test_configuration_reference_is_current():
 def test_every_experiment_has_a_one_line_summary():
     summaries = experiment_summaries()
     assert summaries and all(summaries.values()), [n for n, s in summaries.items() if not s]
+
+
+def test_relative_links_and_images_resolve():
+    """Every relative link or image of README.md and docs/*.md names a file that exists (from the
+    page's own folder, as a renderer resolves it)."""
+    import re
+
+    broken = []
+    for page in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]:
+        for target in re.findall(r"\]\(([^)\s]+)\)", page.read_text()):
+            path = target.split("#", 1)[0]
+            if not path or re.match(r"[a-z]+:", path):  # an anchor on the page, or a URL
+                continue
+            if not (page.parent / path).exists():
+                broken.append(f"{page.relative_to(ROOT)}: {target}")
+    assert not broken, broken
