@@ -143,3 +143,36 @@ def test_manifest_records_which_stages_were_computed_and_which_cached(tmp_path):
     assert {"sample", "evaluate", "optimise"} <= set(first) and set(first) == set(second)
     assert set(first.values()) == {"computed"} and set(second.values()) == {"cached"}
     assert computed_stages(tmp_path / "first") == len(first) and computed_stages(tmp_path / "second") == 0
+
+
+def test_the_document_launches_a_users_multirun(tmp_path):
+    """``launch.multirun`` is ``python -m pipeline -m``: the project's sweeper (it writes
+    ``multirun.yaml`` and checks every job first), Hydra's launcher (each job's ``.hydra``
+    record, mode MULTIRUN), the CLI's task, the sweep aggregated at its end."""
+    import pandas as pd
+    from omegaconf import OmegaConf
+
+    from pipeline.errors import RunError
+    from pipeline.reproduction.launch import multirun
+
+    sweep, dataset = tmp_path / "sweep", tmp_path / "dataset"
+    common = [
+        "+experiment=rpr2_mixed",
+        *TINY,
+        f"paths.output_dir={tmp_path / 'out'}",
+        f"paths.dataset_dir={dataset}",
+        "hydra.sweeper.report=false",
+    ]
+    results = multirun(
+        [*common, f"hydra.sweep.dir={sweep}", "hydra.sweep.subdir=${hydra.job.num}", "objective.w_d=0,1"]
+    )
+    assert [r.return_value["status"] for r in results] == ["complete", "complete"]
+    assert (sweep / "multirun.yaml").exists() and not (sweep / "report.html").exists()
+    for k in (0, 1):
+        assert OmegaConf.load(sweep / str(k) / ".hydra" / "hydra.yaml").hydra.mode == "MULTIRUN"
+        assert (sweep / str(k) / "manifest.json").exists()
+    assert sorted(pd.read_parquet(dataset / "best")["w_d"]) == [0.0, 1.0]
+    # a bad job stops the sweep before any job runs, as under -m (exit 2 there, RunError here)
+    with pytest.raises(RunError, match="exit status 2"):
+        multirun([*common, f"hydra.sweep.dir={tmp_path / 'bad'}", "objective.w_d=0,2"])
+    assert not (tmp_path / "bad").exists()

@@ -1,13 +1,14 @@
 """The document's driver: runs the experiments' declared sweeps into one dataset and collects sections.
 
 Each paper table or figure is an experiment (``conf/experiment/*.yaml``)
-that declares its own sweep in ``hydra.sweeper.params``, the same sweep
-``python -m pipeline -m +experiment=NAME`` runs. :meth:`Reproduction.experiment`
-expands that sweep with the sweeper's own expansion (:func:`pipeline.config.jobs.sweep_jobs`), runs the jobs through
-the cached pipeline (two side by side, one fitness worker each), aggregates
-them into the document's dataset and returns their ``best`` rows read back
-with ``pd.read_parquet`` from that dataset. The sections (one module per
-paper) only read the dataset and write text and figures.
+that declares its own sweep in ``hydra.sweeper.params``. :meth:`Reproduction.experiment`
+runs it as ``python -m pipeline -m +experiment=NAME`` runs it, in this process
+(:func:`pipeline.reproduction.launch.multirun`: Hydra's compose API, the
+project's sweeper, Hydra's joblib launcher with two jobs side by side and one
+fitness worker each, the CLI's task), into the document's dataset, and returns
+the jobs' ``best`` rows read back with ``pd.read_parquet`` from that dataset.
+Which stages computed is read from the runs' manifests (``stages``). The
+sections (one module per paper) only read the dataset and write text and figures.
 """
 
 from __future__ import annotations
@@ -27,10 +28,9 @@ from omegaconf import DictConfig, OmegaConf, open_dict
 
 from pipeline.config import CONFIG_DIR, register_configs
 from pipeline.config import jobs as sweeps
-from pipeline.stages.aggregate import aggregate
+from pipeline.reproduction.launch import multirun
 from pipeline.store.cache import cached
 from pipeline.store.runs import launch_id, read_manifest
-from pipeline.study import run_study
 
 #: studies run side by side (each with one fitness worker): the machine's 2 cores
 STUDY_JOBS = 2
@@ -57,11 +57,6 @@ def _worker_ready() -> None:
     warning); a first task that imported nothing would make the first study's imports look
     like a leak.
     """
-
-
-def _run_in_worker(base: DictConfig, values: list[str], run_dir: Path, job: int, overrides: list[str]) -> None:
-    """``run_study`` of ``base`` with ``values`` (in a worker: ``base`` is its own copy)."""
-    run_study(with_values(base, values), run_dir, job, overrides)
 
 
 def computed_stages(run_dir: Path) -> int:
@@ -119,35 +114,48 @@ class Reproduction:
 
     # ------------------------------------------------------------ experiments
     def run_experiments(self, requests: Sequence[tuple[str, Sequence[str]]], alongside: Sequence = ()) -> None:
-        """Run the declared sweeps of several experiments as one batch, then aggregate them.
+        """Run the declared sweeps of several experiments, each as a user's multirun.
 
-        Why one batch: the jobs run :data:`STUDY_JOBS` at a time, and a sweep of
-        3 jobs run alone leaves a core idle for a whole job; a batch of every
-        experiment a section needs idles only at its very end. Each request is
-        ``(name, extra overrides)``; list the longest jobs first. Experiments
-        already run by this document are not run again. ``alongside``: other
-        independent tasks (:meth:`pending`) run first in the same batch.
+        Each request ``(name, extra overrides)`` is ``python -m pipeline -m
+        +experiment=NAME *extra`` (:func:`pipeline.reproduction.launch.multirun`:
+        the project's sweeper checks every job first, Hydra's joblib launcher
+        runs :data:`STUDY_JOBS` jobs side by side with one fitness worker each,
+        the sweep is aggregated into the document's dataset at its end); a
+        one-job sweep runs on the basic launcher with :data:`STUDY_JOBS` fitness
+        workers. Experiments already run by this document are not run again.
+        ``alongside``: other independent tasks (:meth:`pending`), run first,
+        :data:`STUDY_JOBS` at a time.
         """
-        planned = []
+        self._run_tasks(list(alongside))
         for name, extra in requests:
             label, jobs = self._plan(name, extra)
-            if label in self._ran or any(label == p[0] for p in planned):
+            if label in self._ran:
                 continue
             sweep_dir = self.runs_dir / label
-            planned.append(
-                (
-                    label,
-                    jobs,
-                    [(sweep_dir / str(k), [f"+experiment={name}", *extra, *job]) for k, job in enumerate(jobs)],
-                )
+            launcher = (
+                ["parallel.n_jobs=1", "hydra/launcher=joblib", f"hydra.launcher.n_jobs={STUDY_JOBS}"]
+                if len(jobs) > 1
+                else [f"parallel.n_jobs={STUDY_JOBS}"]
             )
-        if not planned:
-            self._run_tasks(list(alongside))
-            return
-        self.studies([spec for _, _, specs in planned for spec in specs], alongside)
-        aggregate([self.runs_dir / label for label, _, _ in planned], self.dataset)
-        for label, jobs, specs in planned:
-            self._ran[label] = (jobs, [run_dir for run_dir, _ in specs])
+            self._warm.join()  # the joblib launcher's Parallel runs on joblib's (now warm) pool
+            multirun(
+                [
+                    f"+experiment={name}",
+                    *extra,
+                    # quoted: a label holds "=" and "+", which Hydra's override grammar would parse
+                    f"paths.output_dir='{self.output_dir}'",
+                    f"paths.dataset_dir='{self.dataset}'",
+                    f"hydra.sweep.dir='{sweep_dir}'",
+                    "hydra.sweep.subdir=${hydra.job.num}",  # job k's run directory: <sweep>/k
+                    "plot.enabled=false",
+                    "hydra.sweeper.report=false",  # the document draws its own figures
+                    *launcher,
+                ]
+            )
+            run_dirs = [sweep_dir / str(k) for k in range(len(jobs))]
+            # the studies' own record of what they computed (their manifests), wherever they ran
+            self.computed += sum(computed_stages(run_dir) for run_dir in run_dirs)
+            self._ran[label] = (jobs, run_dirs)
 
     def experiment(self, name: str, extra: Sequence[str] = ()) -> pd.DataFrame:
         """Experiment ``name``'s declared sweep (plus ``extra`` overrides), run if not yet; its best rows.
@@ -220,36 +228,6 @@ class Reproduction:
         """
         groups, values = _split(overrides)
         return with_values(copy.deepcopy(self._base(groups)), values)
-
-    def studies(self, specs: list[tuple[Path, list[str]]], alongside: Sequence = ()) -> list[Path]:
-        """Run independent studies side by side (cached) into the given run directories.
-
-        :data:`STUDY_JOBS` studies at a time, each with one fitness worker
-        (jobs x workers <= cores; results do not depend on the number of
-        workers, and the stage cache ignores it). Each worker receives the
-        composed base and applies the study's values itself (the transfer is
-        the copy: no deep copy here). ``alongside``: other tasks (:meth:`pending`)
-        run first in the same batch.
-        """
-        side_by_side = min(STUDY_JOBS, len(specs) + len(alongside))
-        common = [
-            f"paths.output_dir={self.output_dir}",
-            "plot.enabled=false",
-            f"parallel.n_jobs={2 if side_by_side == 1 else 1}",
-        ]
-        if side_by_side == 1:
-            self._run_tasks(list(alongside))
-            for k, (run_dir, overrides) in enumerate(specs):
-                run_study(self.compose([*overrides, *common]), run_dir, k, overrides)
-        else:
-            tasks = []
-            for k, (run_dir, overrides) in enumerate(specs):
-                groups, values = _split([*overrides, *common])
-                tasks.append(delayed(_run_in_worker)(self._base(groups), values, run_dir, k, overrides))
-            self._run_tasks([*alongside, *tasks])
-        # the studies' own record of what they computed (their manifests), wherever they ran
-        self.computed += sum(computed_stages(run_dir) for run_dir, _ in specs)
-        return [run_dir for run_dir, _ in specs]
 
     def _run_tasks(self, tasks: list) -> list:
         """joblib's delayed ``tasks``, :data:`STUDY_JOBS` at a time (in order, results in order)."""

@@ -10,7 +10,7 @@
 * a job that fails at run time does not stop the sweep (the task records it
   in its manifest and returns); at the end the completed jobs are
   aggregated (:func:`finish_sweep`) into ``paths.dataset_dir``, ``tradeoff.png``
-  and ``report.html`` in the sweep directory, and a one-line summary is
+  and ``report.html`` in the sweep directory (unless ``hydra.sweeper.report=false``), and a one-line summary is
   printed; the exit status is 1 if any job failed.
 
 It takes the sweep from the command line and from ``hydra.sweeper.params``
@@ -51,6 +51,9 @@ class CheckedSweeperConf:
     _target_: str = "hydra_plugins.pm_design.checked_sweeper.CheckedSweeper"
     max_batch_size: Optional[int] = None
     params: Optional[dict[str, str]] = None
+    #: write ``tradeoff.png`` and ``report.html`` into the sweep folder at its end (the dataset is
+    #: written either way); the reproduction document, which draws its own figures, turns it off
+    report: bool = True
 
 
 def _fail(message: str, code: int = 2) -> None:
@@ -65,9 +68,12 @@ def job_label(k: int, overrides: Sequence[str]) -> str:
 class CheckedSweeper(Sweeper):
     """See the module docstring. Hydra calls :meth:`setup`, then :meth:`sweep` with the command line's overrides."""
 
-    def __init__(self, max_batch_size: Optional[int] = None, params: Optional[dict[str, str]] = None) -> None:
+    def __init__(
+        self, max_batch_size: Optional[int] = None, params: Optional[dict[str, str]] = None, report: bool = True
+    ) -> None:
         super().__init__()
         self.max_batch_size = max_batch_size
+        self.report = report
         self.params = dict(params or {})
         self.hydra_context: Optional[HydraContext] = None
         self.config: Optional[DictConfig] = None
@@ -116,7 +122,9 @@ class CheckedSweeper(Sweeper):
                 os.environ.pop(LAUNCH_ENV, None)
             else:
                 os.environ[LAUNCH_ENV] = previous
-        finish_sweep([r for batch in returns for r in batch], sweep_dir, Path(self.config.paths.dataset_dir))
+        finish_sweep(
+            [r for batch in returns for r in batch], sweep_dir, Path(self.config.paths.dataset_dir), self.report
+        )
         return returns
 
     def validate_batch_is_legal(self, batch: Sequence[Sequence[str]]) -> None:
@@ -145,9 +153,9 @@ def job_status(result: JobReturn) -> tuple[bool, str]:
     return False, str(status.get("reason", "no result"))
 
 
-def finish_sweep(results: Sequence[JobReturn], sweep_dir: Path, dataset: Path) -> None:
+def finish_sweep(results: Sequence[JobReturn], sweep_dir: Path, dataset: Path, report: bool = True) -> None:
     """Aggregate the completed jobs into ``dataset``, write ``tradeoff.png`` and ``report.html``
-    into ``sweep_dir``, log the summary; one ``error:`` line and exit 1 if any job failed."""
+    into ``sweep_dir`` (``report``), log the summary; one ``error:`` line and exit 1 if any job failed."""
     from pipeline.report import write_report
     from pipeline.stages.aggregate import aggregate
     from pipeline.stages.plot import plot_tradeoff
@@ -160,17 +168,19 @@ def finish_sweep(results: Sequence[JobReturn], sweep_dir: Path, dataset: Path) -
     completed = len(results) - len(failed)
     if completed:
         try:
-            report = aggregate(sweep_dir, dataset)
-            if report.best is not None:
-                plot_tradeoff(report.best, sweep_dir / "tradeoff.png")
-            write_report(sweep_dir)
+            added = aggregate(sweep_dir, dataset)
+            if report:
+                if added.best is not None:
+                    plot_tradeoff(added.best, sweep_dir / "tradeoff.png")
+                write_report(sweep_dir)
         except (ConfigError, RunError) as exc:
             _fail(f"aggregation of {sweep_dir}: {exc}", 1)
     summary = f"{completed} of {len(results)} jobs completed"
     if failed:
         _fail(f"{summary}; failed: {'; '.join(failed)}", 1)
     log.info("%s; dataset %s", summary, dataset)
+    shown = f"report: {sweep_dir / 'report.html'}\n" if report else ""
     print(
-        f"sweep: {sweep_dir}\nreport: {sweep_dir / 'report.html'}\n"
+        f"sweep: {sweep_dir}\n{shown}"
         f"dataset: {dataset} (from pipeline.store import read_dataset; read_dataset({str(dataset)!r}))"
     )
