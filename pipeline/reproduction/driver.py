@@ -125,6 +125,14 @@ class Reproduction:
         workers. Experiments already run by this document are not run again.
         ``alongside``: other independent tasks (:meth:`pending`), run first,
         :data:`STUDY_JOBS` at a time.
+
+        Cost of the user's path: Hydra composes every job twice (the sweeper's
+        check, the launcher; ~0.15 s each) and writes its records and log per
+        job, so a document whose stages are all cached takes ~1 s per job
+        (measured 74 s for the ~75 jobs on the loaded 2-core machine, against
+        9 s when the driver ran the studies itself from :meth:`_base`'s
+        composed configs). :meth:`_base` still composes once per experiment,
+        to read its declared sweep.
         """
         self._run_tasks(list(alongside))
         for name, extra in requests:
