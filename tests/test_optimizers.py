@@ -118,3 +118,30 @@ def test_cmaes_reaches_a_dense_reference_on_a_real_objective():
     found = CMAES(CMAESConfig(seed=0)).run(problem)
     best = polish(problem, found.x, found.fun).fun
     assert best >= reference * (1 - 1e-3)
+
+
+def test_nsga2_history_reports_the_scalar_score_of_the_population():
+    """A Pareto search for a scalar objective (η of (GDI, SURI)) records that scalar per generation,
+    not its first objective: the run's optimum is read against this history."""
+
+    def pair(x):
+        return np.column_stack([x[:, 0], 1 - x[:, 0] ** 2])
+
+    def score(x):  # the scalar the front is searched for: peaks inside the front
+        f = pair(x)
+        return 0.3 * f[:, 0] + 0.7 * f[:, 1]
+
+    problem = Problem(pair, np.zeros(2), np.ones(2), n_objectives=2, score=score)
+    result = NSGA2(NSGA2Config(population=8, generations=3, seed=2, polish=False)).run(problem)
+    history = result.history
+    front_scores = score(result.front[0])
+    assert history["best"].iloc[-1] >= front_scores.max() - 1e-12
+    assert history["best"].iloc[-1] <= 0.7 + 0.3**2 / (4 * 0.7) + 1e-12  # max of the score on [0, 1]
+    best_design = history[["x0", "x1"]].to_numpy()
+    np.testing.assert_allclose(score(best_design), history["best"])  # best is that design's score
+    assert (history["worst"] <= history["mean"]).all() and (history["mean"] <= history["best"]).all()
+    # without a score: the first objective, as before
+    plain = NSGA2(NSGA2Config(population=8, generations=3, seed=2, polish=False)).run(
+        Problem(pair, np.zeros(2), np.ones(2), n_objectives=2)
+    )
+    np.testing.assert_allclose(pair(plain.history[["x0", "x1"]].to_numpy())[:, 0], plain.history["best"])

@@ -87,9 +87,20 @@ class Problem:
         Box bounds, finite, ``lower < upper``.
     n_objectives : int
         1, or m for a multi-objective problem.
+    score : callable, (P, n) -> (P,), optional
+        The run's scalar objective, when a multi-objective problem is solved for
+        it (a Pareto front of (GDI, SURI) searched for the best η): what the
+        history's ``best``/``mean``/``worst`` report. Default: the first objective.
     """
 
-    def __init__(self, function: BatchFunction, lower: np.ndarray, upper: np.ndarray, n_objectives: int = 1) -> None:
+    def __init__(
+        self,
+        function: BatchFunction,
+        lower: np.ndarray,
+        upper: np.ndarray,
+        n_objectives: int = 1,
+        score: BatchFunction | None = None,
+    ) -> None:
         self.lower = np.asarray(lower, dtype=float)
         self.upper = np.asarray(upper, dtype=float)
         if self.lower.ndim != 1 or self.lower.shape != self.upper.shape:
@@ -99,6 +110,7 @@ class Problem:
         self._function = function
         self.n_objectives = int(n_objectives)
         self.n_evaluations = 0
+        self._score = score
 
     @property
     def n_var(self) -> int:
@@ -115,6 +127,13 @@ class Problem:
         if values.shape != expected:
             raise ValueError(f"objective must return shape {expected}; got {values.shape}")
         return values
+
+    def history_values(self, designs: np.ndarray, values: np.ndarray) -> np.ndarray:
+        """What :class:`History` records of a population: the scalar ``score`` of ``designs``
+        (not counted as evaluations: it reads the same evaluations) or, without one, ``values``."""
+        if self._score is None:
+            return values
+        return np.nan_to_num(np.asarray(self._score(np.atleast_2d(designs)), dtype=float), nan=0.0)
 
 
 class History:

@@ -87,6 +87,7 @@ class NSGA2(Optimizer):
             eta_mutation=c.eta_mutation,
             crossover_rate=c.crossover_rate,
             history=history,
+            history_values=problem.history_values,
         )
         designs, values = result.designs[result.front], result.objectives[result.front]
         order = np.lexsort((values[:, 1], values[:, 0]))  # deterministic row order
@@ -175,8 +176,16 @@ def nsga2(
     eta_mutation: float = 20.0,
     crossover_rate: float = 0.9,
     history: History | None = None,
+    history_values: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
 ) -> ParetoResult:
-    """Maximise the objectives (batch, (P, n) -> (P, m)) over ``[lower, upper]``."""
+    """Maximise the objectives (batch, (P, n) -> (P, m)) over ``[lower, upper]``.
+
+    ``history`` records each generation's population by ``history_values(designs,
+    objectives)`` (:meth:`Problem.history_values`: the run's scalar objective, e.g. η
+    of a (GDI, SURI) front) or, without it, by the first objective.
+    """
+    if history_values is None:
+        history_values = lambda designs, values: values  # noqa: E731
     lower = np.asarray(lower, dtype=float)
     upper = np.asarray(upper, dtype=float)
     rng = np.random.default_rng(seed)
@@ -185,7 +194,9 @@ def nsga2(
     vals = np.asarray(objectives(pop), dtype=float)
     n_eval = population
     if history is not None:
-        history.record(pop, vals, population, front_size=float(np.sum(non_dominated_ranks(vals) == 0)))
+        history.record(
+            pop, history_values(pop, vals), population, front_size=float(np.sum(non_dominated_ranks(vals) == 0))
+        )
     for _ in range(generations):
         ranks = non_dominated_ranks(vals)
         crowd = np.zeros(population)
@@ -223,6 +234,8 @@ def nsga2(
         keep = _survivors(merged_vals, population)
         pop, vals = merged[keep], merged_vals[keep]
         if history is not None:
-            history.record(pop, vals, population, front_size=float(np.sum(non_dominated_ranks(vals) == 0)))
+            history.record(
+                pop, history_values(pop, vals), population, front_size=float(np.sum(non_dominated_ranks(vals) == 0))
+            )
     front = non_dominated_ranks(vals) == 0
     return ParetoResult(designs=pop, objectives=vals, front=front, n_evaluations=n_eval)

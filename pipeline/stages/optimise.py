@@ -123,6 +123,8 @@ def optimise_design(
             lower,
             upper,
             n_objectives=len(pair),
+            # the history reports the run's objective of each population, not the pair's first
+            score=lambda x: objective_values(objective.name, rows(x), objective.w_d),
         )
         result = algorithm.run(multi, initial)
         front_x, front_values = result.front
