@@ -128,10 +128,11 @@ class Reproduction:
 
         Cost of the user's path: Hydra composes every job twice (the sweeper's
         check, the launcher; ~0.15 s each) and writes its records and log per
-        job, so a document whose stages are all cached takes ~1 s per job
-        (measured 74 s for the ~75 jobs on the loaded 2-core machine, against
-        9 s when the driver ran the studies itself from :meth:`_base`'s
-        composed configs). :meth:`_base` still composes once per experiment,
+        job: about 1 s more per job than when the driver ran the studies itself
+        from :meth:`_base`'s composed configs (measured alternately on this
+        2-core machine, two tiny sweeps of 9 jobs each with every stage cached:
+        21-25 s against 7-11 s; the whole document with a full cache took 74 s
+        under a load of 5). :meth:`_base` still composes once per experiment,
         to read its declared sweep.
         """
         self._run_tasks(list(alongside))
