@@ -21,6 +21,19 @@ def test_every_experiment_has_a_one_line_summary():
     assert summaries and all(summaries.values()), [n for n, s in summaries.items() if not s]
 
 
+def test_no_experiment_repeats_a_comment_line():
+    """An experiment's header comment says each thing once (h4_pareto repeated its summary line)."""
+    from pipeline import CONFIG_DIR
+
+    repeated = {}
+    for path in sorted((CONFIG_DIR / "experiment").glob("*.yaml")):
+        comments = [line.strip("# ").rstrip() for line in path.read_text().splitlines() if line.startswith("#")]
+        starts = [c[:50] for c in comments if len(c) > 20]
+        if len(starts) != len(set(starts)):
+            repeated[path.stem] = sorted({c for c in starts if starts.count(c) > 1})
+    assert not repeated, repeated
+
+
 def test_relative_links_and_images_resolve():
     """Every relative link or image of README.md and docs/*.md names a file that exists (from the
     page's own folder, as a renderer resolves it)."""
