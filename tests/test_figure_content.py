@@ -149,3 +149,41 @@ def test_report_convergence_has_one_panel_per_mechanism(saved):
     h4_mean = panels[0].lines[0].get_ydata()
     assert list(h4_mean) == pytest.approx([0.1, 0.195, 0.195, 0.2])  # never decreases
     assert "dashed: reference" in panels[0].get_title() and "dashed" not in panels[1].get_title()
+
+
+def test_tradeoff_keeps_optimisers_and_experiments_apart_in_rows_of_three(tmp_path, saved):
+    """GA (h4_mixed), NSGA-II (h4_pareto) at w_d = 0.5 and CMA-ES (h4_design) at 0.8 are three
+    studies of one seed each: three lines, never pooled as "2 seeds"; seven mechanisms are laid
+    out in rows of at most three panels."""
+    runs = pd.DataFrame(
+        {
+            "objective": ["mixed"] * 3,
+            "mechanism": ["h4"] * 3,
+            "optimizer": ["ga", "nsga2", "cmaes"],
+            "experiment": ["h4_mixed", "h4_pareto", "h4_design"],
+            "w_d": [0.5, 0.5, 0.8],
+            "seed": [0, 0, 3],
+            "gdi": [0.30, 0.33, 0.40],
+            "suri": [0.10, 0.05, 0.02],
+            "objective_value": [0.20, 0.19, 0.27],
+        }
+    )
+    plot_module.plot_tradeoff(runs, tmp_path / "t.png")
+    ax = saved[-1].axes[0]
+    assert "one seed per point" in ax.get_title()
+    eta = [line for line in ax.lines if line.get_linestyle() == ":"]
+    assert sorted(tuple(line.get_xdata()) for line in eta) == [(0.5,), (0.5,), (0.8,)]  # nothing joined
+    assert {tuple(line.get_ydata()) for line in eta} == {(0.20,), (0.19,), (0.27,)}  # nothing averaged
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert {"cmaes / h4_design (1 seed)", "ga / h4_mixed (1 seed)", "nsga2 / h4_pareto (1 seed)"} <= set(legend)
+    seven = pd.concat([runs.assign(mechanism=f"m{k}") for k in range(7)], ignore_index=True)
+    plot_module.plot_tradeoff(seven, tmp_path / "t7.png")
+    fig = saved[-1]
+    panels = [a for a in fig.axes if a.axison]
+    assert len(panels) == 7
+    columns = {round(a.get_position().x0, 3) for a in panels}
+    assert len(columns) == 3  # rows of three, not one row of seven
+    width, height = fig.get_size_inches()
+    assert width < 2 * height  # 3 x 3 cells, not a 7:1 strip
+    for figure in saved:
+        check_figure(figure)

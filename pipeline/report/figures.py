@@ -14,11 +14,9 @@ import logging
 
 import numpy as np
 import pandas as pd
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
 
 from pipeline.config import DesignSpace, MechanismConfig
-from pipeline.stages.plot import distinct_seeds
+from pipeline.stages.plot import distinct_seeds, panel_grid
 from pipeline.stages.slices import draw_slice, symbol, workspace_slice
 
 log = logging.getLogger(__name__)
@@ -53,13 +51,7 @@ def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
     # every objective is maximised (pipeline.objectives)
     groups["best"] = groups.sort_values("generation").groupby("run_id")["best"].cummax()
     panels = sorted({(str(o), str(m)) for o, m in zip(groups["objective"], groups["mechanism"])})
-    ncols = min(len(panels), 3) or 1
-    nrows = max(-(-len(panels) // ncols), 1)
-    fig = Figure(figsize=(5.0 * ncols, 3.8 * nrows), layout="constrained")
-    FigureCanvasAgg(fig)
-    axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
-    for ax in axes[len(panels) :]:
-        ax.axis("off")
+    fig, axes = panel_grid(len(panels), 5.0, 3.8)
     for ax, (objective, mechanism) in zip(axes, panels):
         part = groups[(groups["objective"].astype(str) == objective) & (groups["mechanism"].astype(str) == mechanism)]
         references_drawn = False
@@ -130,23 +122,15 @@ def workspace_gallery(rows: pd.DataFrame, configs: dict[str, dict], kind: str, c
     finite = [v for v in finite if v.size]
     vmin = 0.0 if kind == "inverse_condition" else (min(v.min() for v in finite) if finite else None)
     vmax = max(v.max() for v in finite) if finite else None
-    ncols = min(columns, len(slices))
-    nrows = -(-len(slices) // ncols)
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(4.2 * ncols + 1.0, 3.8 * nrows), layout="constrained")
-    FigureCanvasAgg(fig)
-    axes = np.atleast_1d(fig.subplots(nrows, ncols, squeeze=False).ravel())
+    fig, axes = panel_grid(len(slices), 4.2, 3.8, columns)
+    fig.set_figwidth(fig.get_figwidth() + 1.0)  # the shared colour bar
     mesh = None
     for ax, data, title in zip(axes, slices, titles):
         mesh = draw_slice(fig, ax, data, kind, vmin=vmin, vmax=vmax, colorbar=False)
         ax.set_title(title, fontsize=8)
-    for ax in axes[len(slices) :]:
-        ax.set_axis_off()
     label = "1/κ [1]" if kind == "inverse_condition" else slices[0].extent_label
     if mesh is not None and (kind == "inverse_condition" or slices[0].extent is not None):
-        fig.colorbar(mesh, ax=list(axes[: len(slices)]), label=f"{label} (one scale for all panels)")
+        fig.colorbar(mesh, ax=list(axes), label=f"{label} (one scale for all panels)")
     where = f"slice {slices[0].fixed_label}" if slices[0].fixed_label else "whole workspace"
     fig.suptitle(f"{'workspace' if kind == 'workspace' else '1/κ'} of the best designs, {where}", fontsize=10)
     return png(fig)

@@ -249,7 +249,7 @@ scroll or click a figure to zoom (drag to pan, double-click to reset). Hover a r
 <h2>Runs and seeds</h2>{seeds_table(best)}
 <h2>Trade-off</h2>{tradeoff or "<p>No mixed-index runs.</p>"}
 <h2>Convergence</h2>{_img(convergence_figure(best, history), "convergence")}
-{'<h2>Pareto fronts</h2><div class="gallery">' + fronts + "</div>" if fronts else ""}
+{"<h2>Pareto fronts</h2>" + fronts if fronts else ""}
 <h2>Workspaces of the best designs</h2>{galleries(best, dirs) or "<p>No figures (plot.enabled=false).</p>"}
 <h2>Configuration</h2><pre>{html.escape(config)}</pre><ul>{overrides}</ul>
 <script>{script}</script>

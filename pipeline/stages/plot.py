@@ -6,8 +6,8 @@
   (H4: z extent, seed 000 Fig. 5);
 * ``inverse_condition.png``: 1/κ on the same slice (seed 000 Fig. 6);
 * ``pareto.png``: the non-dominated designs of a Pareto optimiser;
-* ``tradeoff.png`` (sweeps): GDI, SURI and η of the optima versus w_d, mean
-  and range over seeds (seed 000 Fig. 8).
+* ``tradeoff.png`` (sweeps): GDI, SURI and η of the optima versus w_d, one
+  line per (optimiser, experiment), mean and range over its seeds (seed 000 Fig. 8).
 
 The workspace slices (sampling and drawing) are :mod:`pipeline.stages.slices`.
 Figures are built on :class:`matplotlib.figure.Figure` with an Agg canvas,
@@ -24,6 +24,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
 from kinematics.base import Mechanism
 from pipeline.stages.slices import draw_slice, symbol, workspace_slice
@@ -34,6 +35,21 @@ def _figure(width: float, height: float, ncols: int = 1) -> tuple[Figure, np.nda
     FigureCanvasAgg(fig)
     axes = np.atleast_1d(fig.subplots(1, ncols, squeeze=False)[0])
     return fig, axes
+
+
+def panel_grid(n_panels: int, width: float, height: float, max_columns: int = 3) -> tuple[Figure, np.ndarray]:
+    """A figure of ``n_panels`` panels (each ``width`` x ``height`` inches) in rows of at most
+    ``max_columns``: a row of seven panels shrunk to a page's width cannot be read. Returns the
+    figure and the used axes (flat, row by row); the grid's unused cells are hidden."""
+    n_panels = max(int(n_panels), 1)
+    ncols = min(n_panels, max_columns)
+    nrows = -(-n_panels // ncols)
+    fig = Figure(figsize=(width * ncols, height * nrows), layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(nrows, ncols, squeeze=False).ravel()
+    for ax in axes[n_panels:]:
+        ax.set_axis_off()
+    return fig, axes[:n_panels]
 
 
 def _save(fig: Figure, path: Path, plot=None) -> Path:
@@ -174,34 +190,54 @@ def distinct_seeds(best: pd.DataFrame, keys: list[str]) -> pd.DataFrame:
     return best.drop_duplicates([*keys, "seed"], keep="first")
 
 
+#: what the trade-off draws per line group: column, label, marker and line style
+TRADEOFF_QUANTITIES = (("gdi", "GDI", "o", "-"), ("suri", "SURI", "s", "--"), ("objective_value", "η", "^", ":"))
+
+
 def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
     """GDI, SURI and η of the mixed-index optima versus w_d, one panel per mechanism (seed 000 Fig. 8).
 
-    Runs with the same (mechanism, optimiser, w_d) and different seeds are drawn as
-    the mean with a band from their minimum to maximum; repeats of one seed count once
-    (:func:`distinct_seeds`).
+    One colour per group of comparable runs, (optimiser, experiment): a GA at w_d = 0.5 and
+    a CMA-ES at w_d = 0.8 are different studies, never one line, and never each other's
+    seeds. Within a group, runs with the same w_d and different seeds are drawn as the mean
+    with a band from their minimum to maximum; repeats of one seed count once
+    (:func:`distinct_seeds`). Panels in rows of at most three (:func:`panel_grid`).
     """
     mixed = best[best["objective"].astype(str) == "mixed"]
-    keys = [k for k in ("mechanism", "optimizer", "w_d") if k in mixed.columns]
+    group_keys = [k for k in ("optimizer", "experiment") if k in mixed.columns]
+    keys = [k for k in ("mechanism", *group_keys, "w_d") if k in mixed.columns]
     mixed = distinct_seeds(mixed, keys)
     mechanisms = sorted(mixed["mechanism"].astype(str).unique()) or ["none"]
-    fig, axes = _figure(4.5 * len(mechanisms), 3.8, len(mechanisms))
+    fig, axes = panel_grid(len(mechanisms), 4.8, 3.9)
     for ax, name in zip(axes, mechanisms):
         part = mixed[mixed["mechanism"].astype(str) == name]
-        stats = part.groupby("w_d")[["gdi", "suri", "objective_value"]].agg(["mean", "min", "max"])
-        for column, label, style in (("gdi", "GDI", "o-"), ("suri", "SURI", "s-"), ("objective_value", "η", "^-")):
-            if len(stats):
-                w = stats.index.to_numpy()
-                ax.plot(w, stats[(column, "mean")], style, label=label, ms=4)
-                ax.fill_between(w, stats[(column, "min")], stats[(column, "max")], alpha=0.2)
-        n_seeds = part.groupby("w_d").size()
+        groups = list(part.groupby(group_keys, sort=True)) if group_keys else [((), part)] * bool(len(part))
+        handles, most_seeds = [], 0
+        for number, (key, frame) in enumerate(groups):
+            colour = f"C{number % 10}"
+            stats = frame.groupby("w_d")[["gdi", "suri", "objective_value"]].agg(["mean", "min", "max"])
+            w = stats.index.to_numpy()
+            for column, _, marker, style in TRADEOFF_QUANTITIES:
+                ax.plot(w, stats[(column, "mean")], marker=marker, ls=style, color=colour, ms=4)
+                ax.fill_between(w, stats[(column, "min")], stats[(column, "max")], color=colour, alpha=0.15)
+            seeds = int(frame.groupby("w_d").size().max())
+            most_seeds = max(most_seeds, seeds)
+            key = key if isinstance(key, tuple) else (key,)
+            label = " / ".join(str(k) for k in key if str(k)) or "runs"
+            handles.append(
+                Line2D([], [], color=colour, lw=6, alpha=0.6, label=f"{label} ({seeds} seed{'s' * (seeds > 1)})")
+            )
         ax.set_xlabel("$w_d$ [1]")
         ax.set_ylabel("GDI, SURI, η [1]")
         ax.grid(alpha=0.3)
-        if len(stats):
-            spread = f"mean and range over {n_seeds.max()} seeds" if n_seeds.max() > 1 else "one seed per point"
+        if len(part):
+            spread = "mean and range over the seeds of each line" if most_seeds > 1 else "one seed per point"
             ax.set_title(f"{name}: GDI, SURI, η of the optima vs $w_d$\n({spread})", fontsize=10)
-            ax.legend(loc="best")
+            styles = [
+                Line2D([], [], color="0.3", marker=marker, ls=style, ms=4, label=label)
+                for _, label, marker, style in TRADEOFF_QUANTITIES
+            ]
+            ax.legend(handles=styles + handles, loc="best", fontsize=7)
         else:  # a sweep of V or GDI alone: say so rather than draw an empty legend
             ax.set_title("the mixed index η versus $w_d$")
             ax.text(0.5, 0.5, "no mixed-index runs in this sweep", ha="center", va="center", transform=ax.transAxes)
