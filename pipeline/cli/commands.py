@@ -9,14 +9,16 @@ for a study's overrides too.
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 from pathlib import Path
 
 from omegaconf.errors import OmegaConfBaseException
 
-from pipeline.config import CONFIG_DIR, validate
+from pipeline.config import CONFIG_DIR, Config, validate
+from pipeline.config.mechanism import working_folder_hint
 from pipeline.config.suggest import did_you_mean, key_suggestion
-from pipeline.errors import ConfigError, RunError
+from pipeline.errors import ConfigError, RunError, check_writable
 
 
 def one_line(exc: BaseException) -> str:
@@ -106,71 +108,151 @@ def print_help() -> None:
     )
 
 
+def check_output_file(option: str, path: Path) -> Path:
+    """``path`` can be written as a file: not a folder, its folder existing (or creatable) and
+    writable; checked before any work, :class:`ConfigError` naming ``option``."""
+    path = Path(path).expanduser()
+    if path.is_dir():
+        raise ConfigError(
+            f"{option}={str(path)!r} is invalid: it is a folder; allowed: a file path in a writable folder"
+        )
+    try:
+        check_writable(option, path.parent)
+    except ConfigError as exc:
+        reason = str(exc).split(" is invalid: ", 1)[1].split("; allowed", 1)[0]
+        raise ConfigError(
+            f"{option}={str(path)!r} is invalid: {reason}; allowed: a file path in a writable folder"
+        ) from None
+    return path
+
+
+def _compose_evaluate(overrides: list[str]):
+    from hydra import compose, initialize_config_dir
+
+    with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3", job_name="pm-design"):
+        return compose(config_name="config", overrides=list(overrides))
+
+
+def _number(name: str, text: str, lo: float, hi: float, unit: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise ConfigError(
+            f"{name}={text!r} is invalid: allowed a number in [{lo:g}, {hi:g}]{' ' + unit if unit else ''}"
+        ) from None
+
+
+def evaluate_overrides(assignments: list[str]) -> tuple[type, list[float], list[str]]:
+    """(mechanism class, design vector, config overrides) of ``pm-design evaluate``'s arguments.
+
+    Raises
+    ------
+    ConfigError
+        One line: a bare word, an unknown mechanism, a key that is neither a design variable nor
+        a config key (with a did-you-mean among the design variables), a missing variable, a
+        value that is not a number.
+    """
+    from kinematics import MECHANISMS, resolve_mechanism
+    from kinematics.plugins import PluginError
+
+    bad = [a for a in assignments if "=" not in a]
+    if bad:
+        raise ConfigError(f"{bad[0]} is invalid: allowed key=value")
+    given = dict(a.split("=", 1) for a in assignments)
+    name = given.pop("mechanism", "h4")
+    if name == "path":
+        if "mechanism.name" not in given:
+            raise ConfigError("mechanism=path needs mechanism.name=package.module:Class (the class to evaluate)")
+        try:
+            cls = resolve_mechanism(given["mechanism.name"])
+        except PluginError as exc:
+            path = given["mechanism.name"]
+            raise ConfigError(f"mechanism.name={path!r} is invalid: {exc}{working_folder_hint(path)}") from None
+    elif name in MECHANISMS:
+        cls = MECHANISMS[name]
+    else:
+        raise ConfigError(
+            f"mechanism={name} is invalid: allowed {', '.join(MECHANISMS)}, or path with "
+            f"mechanism.name=package.module:Class{did_you_mean(name, MECHANISMS)}"
+        )
+    variables = {v.name: v for v in cls.design_variables}
+    plain_keys = {f.name for f in dataclasses.fields(Config)} | {p.name for p in CONFIG_DIR.iterdir() if p.is_dir()}
+    for key in given:
+        bare = key.lstrip("+~")
+        if "." not in bare and bare not in variables and bare != "design" and bare not in plain_keys:
+            raise ConfigError(
+                f"{bare} is not a design variable of {cls.name}: allowed "
+                f"{' '.join(f'{v}=...' for v in variables)} or design=[...], and config keys such as "
+                f"objective.w_d=...{did_you_mean(bare, variables)}"
+            )
+    if "design" in given:
+        text = given.pop("design")
+        numbers = [v.strip() for v in text.strip("[]() ").split(",") if v.strip()]
+        allowed = ", ".join(variables)
+        try:
+            design = [float(v) for v in numbers]
+        except ValueError:
+            raise ConfigError(f"design={text} is invalid: allowed {len(variables)} numbers ({allowed})") from None
+    else:
+        missing = [v for v in variables if v not in given]
+        if missing:
+            raise ConfigError(
+                f"{missing[0]} is missing: allowed {' '.join(f'{v}=...' for v in variables)} "
+                f"or design=[...] ({cls.name}'s design variables)"
+            )
+        design = [_number(v, given.pop(v), d.lower, d.upper, d.unit) for v, d in variables.items()]
+    overrides = [
+        f"mechanism={name}",
+        *(f"{k}={v}" for k, v in given.items()),
+        "hydra.run.dir=.",
+        "experiment_name=evaluate",
+    ]
+    return cls, design, overrides
+
+
 def evaluate_command(argv: list[str]) -> int:
     """``pm-design evaluate mechanism=NAME VAR=VALUE ... [design=[...]] [key=value ...] [--parquet FILE]``.
 
     Design variables by name (``a=250``) or all at once (``design=[250,400,100]``),
     in the mechanism's design units; every other ``key=value`` is a config override
-    (``mechanism.fixed.stroke=120``, ``evaluate.resolution=24``, ``objective.w_d=0.3``).
-    Prints one table; ``--parquet FILE`` also writes it with units. Exit 2 on bad input.
+    (``mechanism.fixed.stroke=120``, ``evaluate.resolution=24``, ``objective.w_d=0.3``);
+    a class of one's own with ``mechanism=path mechanism.name=package.module:Class``.
+    Prints one table; ``--parquet FILE`` also writes it with units (its folder is checked
+    before the evaluation). Exit 2 on bad input, 1 if the file cannot be written after all.
     """
     import argparse
 
-    from hydra import compose, initialize_config_dir
     from hydra.errors import HydraException
 
-    from kinematics import MECHANISMS
+    from pipeline.cli.explain import explain
     from pipeline.stages.design import evaluate_design
-    from pipeline.store.parquet import write_parquet
+    from pipeline.store.parquet import column_unit, write_parquet
 
     parser = argparse.ArgumentParser(prog="pm-design evaluate", description=evaluate_command.__doc__.split("\n")[0])
     parser.add_argument("assignments", nargs="*", help="mechanism=NAME, design variables VAR=VALUE, overrides")
     parser.add_argument("--parquet", type=Path, default=None, help="also write the row to this Parquet file")
     args = parser.parse_args(argv)
-    given = dict(a.split("=", 1) for a in args.assignments if "=" in a)
-    bad = [a for a in args.assignments if "=" not in a]
+    overrides: list[str] = []
     try:
-        if bad:
-            raise ConfigError(f"{bad[0]} is invalid: allowed key=value")
-        name = given.pop("mechanism", "h4")
-        if name not in MECHANISMS:
-            raise ConfigError(
-                f"mechanism={name} is invalid: allowed {', '.join(MECHANISMS)}{did_you_mean(name, MECHANISMS)}"
-            )
-        variables = [v.name for v in MECHANISMS[name].design_variables]
-        if "design" in given:
-            text = given.pop("design").strip("[]() ")
-            design = [float(v) for v in text.split(",") if v.strip()]
-        else:
-            missing = [v for v in variables if v not in given]
-            if missing:
-                raise ConfigError(
-                    f"{missing[0]} is missing: allowed {' '.join(f'{v}=...' for v in variables)} "
-                    f"or design=[...] ({name}'s design variables)"
-                )
-            design = [float(given.pop(v)) for v in variables]
-        overrides = [
-            f"mechanism={name}",
-            *(f"{k}={v}" for k, v in given.items()),
-            "hydra.run.dir=.",
-            "experiment_name=evaluate",
-        ]
-        with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3", job_name="pm-design"):
-            cfg = compose(config_name="config", overrides=overrides)
+        if args.parquet is not None:
+            check_output_file("--parquet", args.parquet)
+        cls, design, overrides = evaluate_overrides(list(args.assignments))
+        try:
+            cfg = _compose_evaluate(overrides)
+        except (HydraException, OmegaConfBaseException) as exc:
+            message = explain(exc, overrides, _compose_evaluate)
+            if message is None:
+                raise
+            raise ConfigError(message) from None
         table = evaluate_design(validate(cfg), design)
-    except ValueError as exc:
-        print(f"error: design is invalid: {exc}; allowed numbers", file=sys.stderr)
-        return 2
     except ConfigError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except (HydraException, OmegaConfBaseException) as exc:
-        print(f"error: {one_line(exc)}{suggestion(exc, list(args.assignments))}", file=sys.stderr)
+        print(f"error: {one_line(exc)}{suggestion(exc, overrides)}", file=sys.stderr)
         return 2
     row = table.iloc[0]
-    units = {v.name: v.unit for v in MECHANISMS[name].design_variables}
-    from pipeline.store.parquet import column_unit
-
+    units = {v.name: v.unit for v in cls.design_variables}
     for column, value in row.items():
         unit = units.get(column) or column_unit(column)[0]
         unit = row["volume_unit"] if unit == "volume_unit" else unit
@@ -178,7 +260,7 @@ def evaluate_command(argv: list[str]) -> int:
         print(f"{column:<24} {text:>14}  {unit if unit not in ('', '1') else ''}".rstrip())
     if args.parquet is not None:
         try:
-            write_parquet(table, args.parquet, {"mechanism": name, "design": design}, units)
+            write_parquet(table, args.parquet, {"mechanism": cls.name, "design": design}, units)
         except RunError as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 1
@@ -205,6 +287,15 @@ def _aggregate_command(argv: list[str]) -> int:
 def _report_command(argv: list[str]) -> int:
     from pipeline.report.html import main as report_main
 
+    out = next((a.split("=", 1)[1] for a in argv if a.startswith("--out=")), None)
+    if "--out" in argv[:-1]:
+        out = argv[argv.index("--out") + 1]
+    if out is not None:  # before the report is built (minutes for a large dataset)
+        try:
+            check_output_file("--out", Path(out))
+        except ConfigError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
     return report_main(argv)
 
 

@@ -8,6 +8,7 @@ line, exit 2.
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -16,7 +17,9 @@ from omegaconf import DictConfig
 from omegaconf.errors import OmegaConfBaseException
 
 from pipeline.cli.commands import one_line, suggestion
+from pipeline.cli.explain import explain
 from pipeline.config import CONFIG_DIR, guard, register_configs, validate
+from pipeline.config.jobs import job_label
 from pipeline.errors import ConfigError, check_writable
 from pipeline.store.runs import check_run_dir
 
@@ -54,6 +57,7 @@ def precheck_overrides(argv: list[str]) -> None:
     flags = [a.split("=", 1)[0] for a in argv if a.startswith("-")]
     if any(f in INFO_FLAGS for f in flags):
         return
+    overrides = [a for a in argv if not a.startswith("-")]
     try:
         unknown = [f for f in flags if f not in MULTIRUN_FLAGS]
         if unknown:
@@ -61,14 +65,13 @@ def precheck_overrides(argv: list[str]) -> None:
                 f"{unknown[0]} is refused: the config comes from conf/ and +experiment=NAME; "
                 f"allowed flags: {', '.join(MULTIRUN_FLAGS + INFO_FLAGS)}"
             )
-        overrides = [a for a in argv if not a.startswith("-")]
         if flags:
             # each job's values are validated by the sweeper, which names the job
-            for job_overrides in _probe_jobs(overrides):
-                guard.check_hydra_node(_compose(job_overrides).hydra)
+            for number, job_overrides in _probe_jobs(overrides):
+                guard.check_hydra_node(_compose_job(job_overrides, number).hydra)
             return
         _probe_jobs(overrides)  # the keys' check
-        cfg = _compose(overrides)
+        cfg = _compose_job(overrides, None)
         guard.check_hydra_node(cfg.hydra)
         validate(cfg)
         run_dir = Path(cfg.hydra.run.dir)
@@ -82,6 +85,18 @@ def precheck_overrides(argv: list[str]) -> None:
         sys.exit(2)
 
 
+def _compose_job(overrides: list[str], number: int | None) -> DictConfig:
+    """:func:`_compose`, its override errors as one :class:`ConfigError` line (naming the sweep's
+    job ``number``, as the sweeper does)."""
+    try:
+        return _compose(overrides)
+    except (HydraException, OmegaConfBaseException) as exc:
+        message = explain(exc, overrides, _compose)
+        if message is None:
+            raise
+        raise ConfigError(message if number is None else f"{job_label(number, overrides)}: {message}") from None
+
+
 def _compose(overrides: list[str]) -> DictConfig:
     """The config of one job (with Hydra's node), as Hydra's compose API builds it."""
     from hydra import compose, initialize_config_dir
@@ -91,26 +106,33 @@ def _compose(overrides: list[str]) -> DictConfig:
         return compose(config_name="config", overrides=list(overrides), return_hydra_config=True)
 
 
-def _probe_jobs(overrides: list[str]) -> list[list[str]]:
-    """Jobs that together hold every override and every swept value: the first job (each sweep
-    at its first value), then each further value of each sweep with the others at their first.
+def _probe_jobs(overrides: list[str]) -> list[tuple[int, list[str]]]:
+    """Jobs that together hold every override and every swept value, with their numbers in the
+    sweep: the first job (each sweep at its first value), then each further value of each sweep
+    with the others at their first.
 
     Every override's key is checked by :func:`pipeline.config.guard.check_override_key` first.
     A sweep that cannot be listed (an interval, a glob) leaves its key out: the sweeper checks it.
+    The numbers are those of :func:`pipeline.config.jobs.sweep_jobs` (keys in order of first
+    mention, the first outermost).
     """
     from hydra.core.override_parser.overrides_parser import OverridesParser
 
     parsed = OverridesParser.create().parse_overrides(overrides)
-    fixed, swept = [], []
+    values: dict[str, list[str]] = {}
     for o in parsed:
         guard.check_override_key(o.key_or_group, "" if o.is_sweep_override() else o.get_value_element_as_str())
+        key = o.get_key_element()
         if not o.is_sweep_override():
-            fixed.append(o.input_line)
+            values[key] = [o.input_line]
         elif o.is_discrete_sweep() and o.value_type.name != "GLOB_CHOICE_SWEEP":
-            swept.append((o.get_key_element(), list(o.sweep_string_iterator())))
-    first = {key: values[0] for key, values in swept if values}
-    jobs = [fixed + [f"{k}={v}" for k, v in first.items()]]
-    for key, values in swept:
-        for value in values[1:]:
-            jobs.append(fixed + [f"{k}={value if k == key else v}" for k, v in first.items()])
+            values[key] = [f"{key}={v}" for v in o.sweep_string_iterator()] or [o.input_line]
+        else:
+            values.pop(key, None)
+    keys = list(values)
+    strides = {k: math.prod(len(values[later]) for later in keys[i + 1 :]) for i, k in enumerate(keys)}
+    jobs = [(0, [values[k][0] for k in keys])]
+    for key in keys:
+        for j in range(1, len(values[key])):
+            jobs.append((j * strides[key], [values[k][j if k == key else 0] for k in keys]))
     return jobs

@@ -57,3 +57,8 @@ def batches(jobs: list[list[str]], max_batch_size: int | None) -> list[list[list
     if max_batch_size < 1:
         raise ConfigError(f"hydra.sweeper.max_batch_size={max_batch_size} is invalid: allowed >= 1, or null")
     return [jobs[k : k + max_batch_size] for k in range(0, len(jobs), max_batch_size)]
+
+
+def job_label(number: int, overrides: Sequence[str]) -> str:
+    """How an error names a sweep's job: ``job 1 (mechanism=rpr2 objective.w_d=0.5)``."""
+    return f"job {number} ({' '.join(overrides)})"

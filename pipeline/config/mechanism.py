@@ -8,7 +8,9 @@ Angles in the config are degrees; they are converted to radians once, in
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Optional
 
 import numpy as np
@@ -63,7 +65,9 @@ class MechanismConfig:
         try:
             resolve_mechanism(self.name)
         except PluginError as exc:
-            raise ConfigError(f"mechanism.name={self.name!r} is invalid: {exc}") from None
+            raise ConfigError(
+                f"mechanism.name={self.name!r} is invalid: {exc}{working_folder_hint(self.name)}"
+            ) from None
         cls = self.cls
         expected = [v.name for v in cls.design_variables]
         d = self.design
@@ -103,10 +107,35 @@ class MechanismConfig:
             self.length is None or (finite(self.length) and self.length > 0),
             "null or a finite number > 0",
         )
+        self._check_design_box()
         try:
             self.build(self.centre)
         except (TypeError, ValueError) as exc:
             raise ConfigError(f"mechanism.fixed: {exc}") from None
+
+    def _check_design_box(self) -> None:
+        """Each bound of the design box alone (the others at the class's default centre) builds a
+        mechanism; else the error names the bound and the design variable, not the parameter it feeds."""
+        variables = self.cls.design_variables
+        default_centre = np.array([0.5 * (v.lower + v.upper) for v in variables])
+        try:
+            self.build(default_centre)
+        except (TypeError, ValueError):
+            return  # the fixed parameters alone fail: reported as mechanism.fixed
+        for key in ("lower", "upper"):
+            bounds = getattr(self.design, key)
+            for k, (v, value) in enumerate(zip(variables, bounds)):
+                x = default_centre.copy()
+                x[k] = value
+                try:
+                    self.build(x)
+                except (TypeError, ValueError) as exc:
+                    unit = f" ({v.unit})" if v.unit else ""
+                    raise ConfigError(
+                        f"mechanism.design.{key}={bounds} is invalid: {v.name}={value:g} cannot be built "
+                        f"({exc}); allowed for {v.name}: values {self.name} can build, e.g. its default "
+                        f"[{v.lower:g}, {v.upper:g}]{unit}"
+                    ) from None
 
     @property
     def cls(self) -> type[Mechanism]:
@@ -179,3 +208,18 @@ def _checked_fixed(cls: type[Mechanism], given: dict[str, Any]) -> dict[str, Any
 def _default_orientation(mechanism: type[Mechanism]) -> tuple[float, float]:
     centre = [0.5 * (v.lower + v.upper) for v in mechanism.design_variables]
     return mechanism.from_design(np.array(centre), **mechanism.default_fixed).default_orientation
+
+
+def working_folder_hint(path: str) -> str:
+    """Why a module lying in the working folder is not found: the ``pm-design`` console script,
+    unlike ``python -m pipeline``, does not put the working folder on ``sys.path`` (Python's rule
+    for ``-m``; the project adds no path of its own)."""
+    top = path.partition(":")[0].split(".")[0]
+    here = Path.cwd()
+    on_path = any(Path(p or ".").resolve() == here.resolve() for p in sys.path)
+    if not top or on_path or not ((here / f"{top}.py").is_file() or (here / top / "__init__.py").is_file()):
+        return ""
+    return (
+        f"; {top} is in the working folder, which pm-design does not import from: "
+        f"run python -m pipeline here instead, or install it (pip install -e <its project folder>)"
+    )

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import os
 
 from pipeline.config.schema import Config
 
@@ -20,6 +21,11 @@ def did_you_mean(word: str, options) -> str:
         plain = {o.replace("_", "").lower(): o for o in options}
         key = word.replace("_", "").lower()
         match = [plain[key]] if key in plain else []
+    if not match:  # the same stem under another name ("population" for cmaes's "popsize")
+        shared = {o: len(os.path.commonprefix([o.lower(), word.lower()])) for o in options}
+        best = max(shared.values(), default=0)
+        match = [o for o, n in shared.items() if n == best and n >= 3][:1]
+    match = [m for m in match if m != word]  # the word itself is never the advice
     return f"; did you mean {match[0]}?" if match else ""
 
 

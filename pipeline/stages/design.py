@@ -51,7 +51,7 @@ def evaluate_design(c: Config, design: list[float]) -> pd.DataFrame:
             if isinstance(v, (int, float, str)) and not isinstance(v, bool) and k not in names
         }
     )
-    row.update(frame.iloc[0].to_dict())
+    row.update(frame.to_dict("records")[0])  # per column: int64 counts stay integers (as in the dataset)
     row["volume_unit"] = mech.volume_unit(m.orientation_rad())
     row["w_d"] = float(c.objective.w_d)
     row["eta"] = float(objective_values("mixed", rows, c.objective.w_d)[0])

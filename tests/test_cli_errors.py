@@ -1,0 +1,125 @@
+"""Bad input on the command line: one ``error:`` line naming the field and what is allowed, exit 2,
+before any work and without a partial output file (new-user review of the command line)."""
+
+from __future__ import annotations
+
+import sys
+
+import pandas as pd
+import pytest
+
+from pipeline.cli import evaluate_command, precheck_overrides
+from pipeline.cli.commands import subcommand
+from pipeline.config import register_configs
+
+RPR2 = ["mechanism=rpr2", "design=[5,6]"]
+
+
+def _one_line(capsys) -> str:
+    captured = capsys.readouterr()
+    err = captured.err.strip()
+    assert err.startswith("error:") and "\n" not in err and "Traceback" not in err, err
+    return err
+
+
+def test_an_unusable_parquet_path_is_refused_before_the_evaluation(tmp_path, capsys):
+    not_a_folder = tmp_path / "file"
+    not_a_folder.write_text("")
+    assert evaluate_command([*RPR2, "--parquet", str(not_a_folder / "x.parquet")]) == 2
+    out = capsys.readouterr()
+    assert out.out == "", "the table was computed before the path was checked"
+    assert out.err.startswith("error: --parquet=") and "allowed" in out.err and out.err.count("\n") == 1
+
+
+def test_an_unusable_report_path_is_refused_before_the_report(tmp_path, capsys):
+    not_a_folder = tmp_path / "file"
+    not_a_folder.write_text("")
+    assert subcommand(["report", str(tmp_path), "--out", str(not_a_folder / "r.html")]) == 2
+    err = _one_line(capsys)
+    assert err.startswith("error: --out=") and "allowed" in err
+    assert subcommand(["report", str(tmp_path), f"--out={tmp_path}"]) == 2  # a folder, not a file
+    assert "--out=" in _one_line(capsys)
+
+
+@pytest.mark.parametrize(
+    "argv, says, never",
+    [
+        # the design box's bound, not the mechanism parameter it feeds
+        (
+            ["mechanism.design.lower=[-1,0.01,0.35]", "+debug=fast"],
+            ["mechanism.design.lower=", "d_ratio=-1", "allowed for d_ratio", "[0.01, 0.15]"],
+            "mechanism.fixed",
+        ),
+        # another optimiser's key: which ones have it, and the nearest key of the chosen one
+        (
+            ["optimizer=cmaes", "optimizer.population=4", "+debug=fast"],
+            ["not a key of cmaes", "optimizer=de", "did you mean optimizer.popsize?"],
+            "did you mean optimizer.population",
+        ),
+        # a sweep's job that does not have the key: the job and the mechanism's own keys
+        (
+            ["-m", "mechanism=h4,rpr2", "mechanism.fixed.stroke=50", "+debug=fast"],
+            ["job 1 (mechanism=rpr2", "mechanism.fixed.stroke is not a parameter of rpr2", "mechanism.fixed.q_max"],
+            "To append",
+        ),
+        (["sample.n=nan", "+debug=fast"], ["sample.n=nan is invalid: allowed an integer in [1, 1000000]"], "merging"),
+        (["evaluate.allow_coarse=maybe"], ["evaluate.allow_coarse=maybe is invalid: allowed true or false"], "merging"),
+        (["objective.wd=0.5"], ["did you mean objective.w_d?"], "To append"),
+    ],
+)
+def test_a_run_s_bad_override_names_its_field(argv, says, never, capsys):
+    register_configs()
+    with pytest.raises(SystemExit) as exit_info:
+        precheck_overrides(argv)
+    assert exit_info.value.code == 2
+    err = _one_line(capsys)
+    assert all(s in err for s in says) and never not in err, err
+
+
+@pytest.mark.parametrize(
+    "argv, says",
+    [
+        (["mechanism=h4", "d_ration=0.06", "h_ratio=0.1", "Qz_ratio=0.4"], ["d_ration is not a design variable of h4"]),
+        (["mechanism=h4", "d_ratio=0.06", "h_ratio=0.1", "Qz_ratio=0.4", "+dd=3"], ["d_ratio=... h_ratio=..."]),
+        (["mechanism=h5", "d_ratio=0.06"], ["mechanism=h5 is invalid: allowed delta", "path with mechanism.name="]),
+        ([*RPR2, "objective.w_d=2"], ["error: objective.w_d=2.0 is invalid: allowed [0, 1]"]),
+        (["mechanism=rpr2", "b=x", "q_min=6"], ["b='x' is invalid: allowed a number in [1, 10] mm"]),
+        ([*RPR2, "sample.n=nan"], ["error: sample.n=nan is invalid: allowed an integer"]),
+        ([*RPR2, "mechanism.fixed.stroke=50"], ["mechanism.fixed.stroke is not a parameter of rpr2"]),
+    ],
+)
+def test_evaluate_s_errors_are_the_plain_one_liner_of_their_field(argv, says, capsys):
+    register_configs()
+    assert evaluate_command(argv) == 2
+    err = _one_line(capsys)
+    assert all(s in err for s in says), err
+    assert "design is invalid" not in err and "allowed numbers" not in err and "+" not in err.split(":")[1], err
+
+
+def test_evaluate_takes_a_class_by_its_path_like_a_run(capsys):
+    register_configs()
+    assert evaluate_command(["mechanism=path", "mechanism.name=kinematics.rpr2:RPR2", "design=[5,6]"]) == 0
+    by_path = capsys.readouterr().out.splitlines()
+    assert evaluate_command(RPR2) == 0
+    by_name = capsys.readouterr().out.splitlines()
+    assert by_path[0].split() == ["mechanism", "kinematics.rpr2:RPR2"]  # as a run's rows name it
+    assert by_path[1:] == by_name[1:] and any(ln.startswith("volume ") for ln in by_name)
+
+
+def test_a_module_in_the_working_folder_is_explained_for_the_console_script(tmp_path, monkeypatch, capsys):
+    (tmp_path / "my_cli_mech.py").write_text("from kinematics.rpr2 import RPR2 as MyBar\n")
+    monkeypatch.chdir(tmp_path)
+    # as under the pm-design console script: the working folder is not on sys.path
+    monkeypatch.setattr(sys, "path", [p for p in sys.path if p not in ("", ".", str(tmp_path))])
+    register_configs()
+    assert evaluate_command(["mechanism=path", "mechanism.name=my_cli_mech:MyBar", "design=[5,6]"]) == 2
+    err = _one_line(capsys)
+    assert "mechanism.name='my_cli_mech:MyBar'" in err and "python -m pipeline" in err and "pip install" in err
+
+
+def test_evaluate_s_parquet_has_the_dataset_s_integer_columns(tmp_path, capsys):
+    out = tmp_path / "design.parquet"
+    assert evaluate_command([*RPR2, "--parquet", str(out)]) == 0
+    table = pd.read_parquet(out)
+    for column in ("n_samples", "n_inside", "resolution"):
+        assert table[column].dtype == "int64", (column, table[column].dtype)
