@@ -115,3 +115,22 @@ def test_read_dataset_refuses_unknown_tables(tmp_path):
         read_dataset(tmp_path, "bset")
     with pytest.raises(ConfigError, match="no best table"):
         read_dataset(tmp_path)
+
+
+def test_help_lists_the_experiments_of_plug_in_packages(tmp_path, monkeypatch, capsys):
+    """As a run finds them: Hydra's search path, with the packages' ``pm_design.configs`` entry points."""
+    from hydra_plugins.pm_design import external_configs
+    from tests.test_external_mechanism import EXAMPLE, write_distribution_record
+
+    write_distribution_record(tmp_path)  # what pip install examples/five_bar records
+    monkeypatch.syspath_prepend(str(EXAMPLE / "src"))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    external_configs._search_paths.cache_clear()  # the search path of this process, without the package
+    try:
+        print_help()
+    finally:
+        external_configs._search_paths.cache_clear()
+    text = capsys.readouterr().out
+    line = next(ln for ln in text.splitlines() if ln.strip().startswith("five_bar_mixed "))
+    assert "five-bar" in line  # its own summary line, read from the package
+    assert any(ln.strip().startswith("h4_mixed ") for ln in text.splitlines())

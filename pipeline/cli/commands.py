@@ -84,19 +84,39 @@ every complete run is added to outputs/dataset (pipeline.store.read_dataset() re
 Presets: +debug=fast (tiny sizes; kept out of the dataset's default view), +reading=NAME.
 Config groups: mechanism={mechanisms}  objective={objectives}  optimizer={optimizers}
 
-Experiments (+experiment=NAME, conf/experiment/):
+Experiments (+experiment=NAME; conf/experiment/ and installed plug-in packages):
 {experiments}
 """
 
 
+def experiments_on_search_path() -> dict[str, str]:
+    """Every experiment ``+experiment=NAME`` can compose, with its one-line summary: Hydra's own
+    list of the group on its search path (conf/ and the plug-in packages' ``pm_design.configs``
+    entry points, :mod:`hydra_plugins.pm_design.external_configs`), as a run finds them."""
+    import importlib.resources
+
+    from hydra import initialize_config_dir
+    from hydra.core.global_hydra import GlobalHydra
+
+    from kinematics.plugins import config_search_paths
+    from pipeline.report.reference import experiment_summaries
+
+    with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3", job_name="pm-design"):
+        names = GlobalHydra.instance().config_loader().get_group_options("experiment")
+    texts = experiment_summaries()
+    for package in config_search_paths():
+        folder = Path(str(importlib.resources.files(package.removeprefix("pkg://"))))
+        texts = {**experiment_summaries(folder), **texts}  # conf/ first, as on Hydra's search path
+    return {name: texts.get(name, "") for name in sorted(names)}
+
+
 def print_help() -> None:
-    """``--help``: usage, subcommands, and one line per experiment."""
+    """``--help``: usage, subcommands, and one line per experiment (plug-in packages' included)."""
     from kinematics import MECHANISMS
     from pipeline.objectives import OBJECTIVES
     from pipeline.optimizers import OPTIMIZERS
-    from pipeline.report.reference import experiment_summaries
 
-    summaries = experiment_summaries()
+    summaries = experiments_on_search_path()
     width = max(map(len, summaries), default=0)
     print(
         HELP.format(
