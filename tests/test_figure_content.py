@@ -187,3 +187,91 @@ def test_tradeoff_keeps_optimisers_and_experiments_apart_in_rows_of_three(tmp_pa
     assert width < 2 * height  # 3 x 3 cells, not a 7:1 strip
     for figure in saved:
         check_figure(figure)
+
+
+def assert_titles_fit(fig: Figure) -> None:
+    """Every title and suptitle lies inside the figure and off every colour bar (once drawn)."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    page = fig.bbox
+    bars = [ax.get_window_extent(renderer) for ax in fig.axes if ax.get_label() == "<colorbar>"]
+    texts = [ax.title for ax in fig.axes] + ([fig._suptitle] if fig._suptitle is not None else [])
+    for text in texts:
+        if not text.get_text():
+            continue
+        box = text.get_window_extent(renderer)
+        assert page.x0 - 1 <= box.x0 and box.x1 <= page.x1 + 1, f"title cut off: {text.get_text()!r}"
+        assert box.y1 <= page.y1 + 1, f"title cut off at the top: {text.get_text()!r}"
+        for bar in bars:
+            assert not box.overlaps(bar), f"title under the colour bar: {text.get_text()!r}"
+
+
+@pytest.mark.parametrize("name", sorted(MECHANISMS))
+def test_run_figure_titles_fit_for_every_mechanism(name, tmp_path, saved, monkeypatch):
+    """A Gough-Stewart slice names five fixed pose variables: the title must wrap, not run off the
+    figure or under the colour bar (coarse slices: the titles are what is tested)."""
+    from pipeline.stages import slices
+
+    monkeypatch.setattr(slices, "SLICE_RESOLUTION", 10)
+    config = MechanismConfig(name=name)
+    mech = config.build(config.centre)
+    what = f"{name}, mixed, w_d = 0.5, seed 0"
+    plot_module.plot_workspace(
+        mech,
+        config.orientation_rad() or mech.default_orientation,
+        0.01,
+        None,
+        tmp_path,
+        what,
+        design_volume="design's V = 7.25346e+07 mm³",
+    )
+    history = pd.DataFrame({"generation": range(3), "best": [0.1, 0.2, 0.3], "mean": [0.1, 0.15, 0.2]})
+    plot_module.plot_convergence(history, tmp_path / "c.png", f"cmaes convergence ({what})", "η [1]")
+    front = pd.DataFrame({"gdi": [0.1, 0.2], "suri": [0.3, 0.1]})
+    plot_module.plot_front(front, ["gdi", "suri"], tmp_path / "f.png", what)
+    assert len(saved) == 4
+    assert "7.25346e+07 mm³" in saved[1].axes[0].get_title()  # whole, on one line
+    for fig in saved:
+        assert_titles_fit(fig)
+
+
+def test_convergence_shows_the_polished_optimum(tmp_path, saved):
+    """The run reports η 0.274225 found by the polish step after the last generation (best so far
+    0.2714): the run's figure and the report's panel both draw it, and the gap is taken from it."""
+    from pipeline.report.figures import convergence_figure
+
+    history = pd.DataFrame({"generation": range(4), "best": [0.26, 0.2714, 0.2626, 0.27], "mean": [0.2] * 4})
+    plot_module.plot_convergence(
+        history,
+        tmp_path / "c.png",
+        "cmaes convergence (h4)",
+        "η [1]",
+        reference=0.28,
+        optimum=0.274225,
+        found_by="polish",
+    )
+    ax = saved[-1].axes[0]
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "after polish: 0.274225" in legend
+    assert any("gap 2.06 %" in text for text in legend)  # (0.28 - 0.274225) / 0.28, not from 0.2714
+    assert max(max(line.get_ydata()) for line in ax.lines) == pytest.approx(0.28)
+    assert any(0.274225 in list(line.get_ydata()) for line in ax.lines)
+    best = pd.DataFrame(
+        {
+            "run_id": ["a"],
+            "mechanism": ["h4"],
+            "objective": ["mixed"],
+            "objective_unit": ["1"],
+            "w_d": [0.8],
+            "optimizer": ["cmaes"],
+            "seed": [3],
+            "objective_value": [0.274225],
+            "found_by": ["polish"],
+        }
+    )
+    convergence_figure(best, history.assign(run_id="a"))
+    panel = saved[-1].axes[0]
+    assert "after polish: 0.2742" in [t.get_text() for t in panel.get_legend().get_texts()]
+    for fig in saved:
+        check_figure(fig)
+        assert_titles_fit(fig)

@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 
 from pipeline.config import DesignSpace, MechanismConfig
-from pipeline.stages.plot import distinct_seeds, panel_grid
+from pipeline.stages.plot import distinct_seeds, fit_title, panel_grid, set_title
 from pipeline.stages.slices import draw_slice, symbol, workspace_slice
 
 log = logging.getLogger(__name__)
@@ -41,8 +41,9 @@ def caption(row: pd.Series) -> str:
 
 def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
     """Best objective so far against the generation, one panel per (objective, mechanism) and one
-    line per group: mean and range over distinct seeds, with the group's reference optimum
-    (dashed, where one was run) and the final gap in percent. Best so far, not best per
+    line per group: mean and range over distinct seeds, the group's reported optimum where it
+    beats the last generation (a star "after polish": the polish step follows the generations),
+    with the group's reference optimum (dashed, where one was run) and the final gap in percent. Best so far, not best per
     generation: a restarting optimiser (IPOP-CMA-ES) starts each restart from a wide population,
     whose best drops without anything being lost. One panel per mechanism because the objective's
     scale differs between mechanisms (η of a 2-RPR near 0.8, of an H4 near 0.2)."""
@@ -62,6 +63,23 @@ def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
             label += f" ({n_seeds} seed{'s' if n_seeds > 1 else ''})"
             (line,) = ax.plot(stats.index, stats["mean"], label=label)
             ax.fill_between(stats.index, stats["min"], stats["max"], alpha=0.2, color=line.get_color())
+            members = runs[runs["run_id"].isin(frame["run_id"].unique())]
+            final = float(stats["mean"].iloc[-1])
+            reported = float(members["objective_value"].mean()) if "objective_value" in members else np.nan
+            if np.isfinite(reported) and reported > final:  # the polish step after the last generation
+                polished = "found_by" in members and (members["found_by"].astype(str) == "polish").any()
+                last = float(stats.index[-1])
+                ax.plot([last, last + 0.5], [final, reported], ":", lw=1, color=line.get_color())
+                ax.plot(
+                    [last + 0.5],
+                    [reported],
+                    "*",
+                    ms=10,
+                    color=line.get_color(),
+                    label=f"{'after polish' if polished else 'reported'}: {reported:.4g}"
+                    + (" (mean)" if n_seeds > 1 else ""),
+                )
+                final = reported
             ref = (
                 runs.loc[runs["run_id"].isin(frame["run_id"].unique()), "reference_value"]
                 if "reference_value" in runs
@@ -71,7 +89,7 @@ def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
             if len(ref):
                 references_drawn = True
                 reference = float(ref.max())
-                gap = 100 * (reference - stats["mean"].iloc[-1]) / abs(reference) if reference else np.nan
+                gap = 100 * (reference - final) / abs(reference) if reference else np.nan
                 ax.axhline(
                     reference,
                     ls="--",
@@ -82,10 +100,12 @@ def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
         ax.set_xlabel("generation [1]")
         unit = best.loc[best["objective"].astype(str) == objective, "objective_unit"].iloc[0]
         ax.set_ylabel(f"{symbol(objective)} [{unit}]")
-        ax.set_title(
+        set_title(
+            ax,
             f"{mechanism}: convergence of {symbol(objective)}, best so far\n"
-            f"(mean and range over distinct seeds{'; dashed: reference' if references_drawn else ''})",
-            fontsize=9,
+            f"(mean and range over distinct seeds{', dashed: reference' if references_drawn else ''})",
+            9,
+            width=4.3,
         )
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7, loc="best")
@@ -127,10 +147,11 @@ def workspace_gallery(rows: pd.DataFrame, configs: dict[str, dict], kind: str, c
     mesh = None
     for ax, data, title in zip(axes, slices, titles):
         mesh = draw_slice(fig, ax, data, kind, vmin=vmin, vmax=vmax, colorbar=False)
-        ax.set_title(title, fontsize=8)
+        set_title(ax, title, 8, width=3.6)
     label = "1/κ [1]" if kind == "inverse_condition" else slices[0].extent_label
     if mesh is not None and (kind == "inverse_condition" or slices[0].extent is not None):
         fig.colorbar(mesh, ax=list(axes), label=f"{label} (one scale for all panels)")
     where = f"slice {slices[0].fixed_label}" if slices[0].fixed_label else "whole workspace"
-    fig.suptitle(f"{'workspace' if kind == 'workspace' else '1/κ'} of the best designs, {where}", fontsize=10)
+    title = f"{'workspace' if kind == 'workspace' else '1/κ'} of the best designs, {where}"
+    fig.suptitle(fit_title(title, 0.9 * fig.get_figwidth(), 10), fontsize=10)
     return png(fig)

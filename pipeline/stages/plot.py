@@ -18,6 +18,7 @@ change the backend of a notebook.
 from __future__ import annotations
 
 import tempfile
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -35,6 +36,38 @@ def _figure(width: float, height: float, ncols: int = 1) -> tuple[Figure, np.nda
     FigureCanvasAgg(fig)
     axes = np.atleast_1d(fig.subplots(1, ncols, squeeze=False)[0])
     return fig, axes
+
+
+def fit_title(text: str, width: float, fontsize: float) -> str:
+    """``text`` wrapped to fit ``width`` inches at ``fontsize`` points: a too long title is cut
+    off at the figure's edges or runs under its colour bar (a Gough-Stewart slice names six
+    pose variables). Breaks at "; " first, then between words; kept lines stay whole."""
+    chars = max(int(width * 72 / (0.6 * fontsize)), 16)  # a character is about 0.6 em wide
+    lines = []
+    for line in text.split("\n"):
+        parts = line.split("; ") if len(line) > chars else [line]
+        for k, part in enumerate(parts):
+            part = part + (";" if k < len(parts) - 1 else "")
+            lines.extend(_balanced_wrap(part, chars))
+    return "\n".join(lines)
+
+
+def _balanced_wrap(text: str, chars: int) -> list[str]:
+    """``text`` in as few lines of at most ``chars`` characters as it needs, of even lengths
+    (no line of one word left over)."""
+    lines = textwrap.wrap(text, chars, break_on_hyphens=False, break_long_words=False) or [""]
+    for width in range(-(-len(text) // len(lines)), chars):
+        even = textwrap.wrap(text, width, break_on_hyphens=False, break_long_words=False)
+        if len(even) == len(lines):
+            return even
+    return lines
+
+
+def set_title(ax, text: str, fontsize: float = 10, width: float | None = None) -> None:
+    """The axes' title, wrapped (:func:`fit_title`) to ``width`` inches (default 0.7 of the
+    figure's width: the rest holds labels, ticks and a colour bar)."""
+    width = 0.7 * ax.figure.get_figwidth() if width is None else width
+    ax.set_title(fit_title(text, width, fontsize), fontsize=fontsize)
 
 
 def panel_grid(n_panels: int, width: float, height: float, max_columns: int = 3) -> tuple[Figure, np.ndarray]:
@@ -92,6 +125,8 @@ def run_figures(mechanism, objective, optimizer, plot, optimum: dict) -> dict[st
             f"{symbol(objective.name)} [{unit}]",
             plot,
             reference=best.get("reference_value"),
+            optimum=best.get("objective_value"),
+            found_by=str(best.get("found_by", "")),
         )
         plot_workspace(
             mech,
@@ -110,13 +145,22 @@ def run_figures(mechanism, objective, optimizer, plot, optimum: dict) -> dict[st
 
 
 def plot_convergence(
-    history: pd.DataFrame, path: Path, title: str, ylabel: str, plot=None, reference: float | None = None
+    history: pd.DataFrame,
+    path: Path,
+    title: str,
+    ylabel: str,
+    plot=None,
+    reference: float | None = None,
+    optimum: float | None = None,
+    found_by: str = "",
 ) -> Path:
     """Best so far, best and mean objective per generation (seed 000 Fig. 7), with the reference optimum.
 
-    ``reference`` (the objective's unit): the reference optimum (CMA-ES + polish,
-    :mod:`pipeline.stages.optimise`), drawn as a horizontal line with the final gap
-    ``(reference - best) / |reference|`` in percent; None or NaN: not run.
+    ``optimum`` (the objective's unit): the run's reported optimum; where it is better than
+    the history's best (the polish step after the last generation) it is drawn as a marker
+    after the last generation, labelled by ``found_by``. ``reference``: the reference optimum
+    (CMA-ES + polish, :mod:`pipeline.stages.optimise`), drawn as a horizontal line with the
+    gap ``(reference - optimum) / |reference|`` in percent; None or NaN: not run.
     """
     fig, (ax,) = _figure(6, 4)
     # best so far (objectives are maximised): a restart of IPOP-CMA-ES lowers the generation's
@@ -125,13 +169,19 @@ def plot_convergence(
     ax.plot(history["generation"], so_far, label="best so far")
     ax.plot(history["generation"], history["best"], label="best of the generation", lw=0.8, alpha=0.6)
     ax.plot(history["generation"], history["mean"], label="population mean", alpha=0.7)
+    final = float(so_far.iloc[-1])
+    if optimum is not None and np.isfinite(optimum) and optimum > final:
+        last = float(history["generation"].iloc[-1])
+        step = "after polish" if found_by == "polish" else f"reported ({found_by})" if found_by else "reported"
+        ax.plot([last, last + 0.5], [final, optimum], ":", color="C0", lw=1)
+        ax.plot([last + 0.5], [optimum], "*", color="C3", ms=11, label=f"{step}: {optimum:.6g}")
+        final = float(optimum)
     if reference is not None and np.isfinite(reference):
-        final = float(so_far.iloc[-1])
         gap = 100 * (reference - final) / abs(reference) if reference else float("nan")
         ax.axhline(reference, color="k", ls="--", lw=1, label=f"reference optimum {reference:.6g} (gap {gap:.3g} %)")
     ax.set_xlabel("generation [1]")
     ax.set_ylabel(ylabel)
-    ax.set_title(title)
+    set_title(ax, title, 11, width=0.85 * fig.get_figwidth())
     ax.legend(loc="lower right", fontsize=8)
     ax.grid(alpha=0.3)
     return _save(fig, path, plot)
@@ -160,7 +210,7 @@ def plot_workspace(
         draw_slice(fig, ax, data, name)
         kind = "workspace" if name == "workspace" else "1/κ"
         where = f"slice {data.fixed_label}" if data.fixed_label else "whole workspace"
-        ax.set_title(f"{kind}, {what}\n{where}" + (f"; {design_volume}" if design_volume else ""), fontsize=10)
+        set_title(ax, f"{kind}, {what}\n{where}" + (f"; {design_volume}" if design_volume else ""), 10)
         out.append(_save(fig, Path(directory) / f"{name}.png", plot))
     return out
 
@@ -177,7 +227,7 @@ def plot_front(
     ax.plot(front[a].to_numpy()[order], front[b].to_numpy()[order], "o-", ms=4)
     ax.set_xlabel(f"{symbol(a)} [{units.get(a, '1')}]")
     ax.set_ylabel(f"{symbol(b)} [{units.get(b, '1')}]")
-    ax.set_title(f"Pareto front of {symbol(a)} and {symbol(b)}, {what}")
+    set_title(ax, f"Pareto front of {symbol(a)} and {symbol(b)}, {what}", 11, width=0.85 * fig.get_figwidth())
     ax.grid(alpha=0.3)
     return _save(fig, path, plot)
 
@@ -208,7 +258,7 @@ def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
     keys = [k for k in ("mechanism", *group_keys, "w_d") if k in mixed.columns]
     mixed = distinct_seeds(mixed, keys)
     mechanisms = sorted(mixed["mechanism"].astype(str).unique()) or ["none"]
-    fig, axes = panel_grid(len(mechanisms), 4.8, 3.9)
+    fig, axes = panel_grid(len(mechanisms), 4.8, 3.9)  # titles wrapped to 4 of a panel's 4.8 in
     for ax, name in zip(axes, mechanisms):
         part = mixed[mixed["mechanism"].astype(str) == name]
         groups = list(part.groupby(group_keys, sort=True)) if group_keys else [((), part)] * bool(len(part))
@@ -232,7 +282,7 @@ def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
         ax.grid(alpha=0.3)
         if len(part):
             spread = "mean and range over the seeds of each line" if most_seeds > 1 else "one seed per point"
-            ax.set_title(f"{name}: GDI, SURI, η of the optima vs $w_d$\n({spread})", fontsize=10)
+            set_title(ax, f"{name}: GDI, SURI, η of the optima vs $w_d$\n({spread})", 10, width=4.0)
             styles = [
                 Line2D([], [], color="0.3", marker=marker, ls=style, ms=4, label=label)
                 for _, label, marker, style in TRADEOFF_QUANTITIES
