@@ -67,6 +67,10 @@ def test_report_table_units_gaps_captions_and_seeds(sweep):
     assert re.findall(r"<td>([^<]*)</td>", row)[:4] == ["3", "2", "0, 1", "1"]
     assert '<meta name="viewport"' in text and "overflow-x: auto" in text
     assert "<script src=" not in text and "https://" not in text  # offline: nothing fetched
+    # a folder of runs without multirun.yaml: the runs' own configs (the box was empty)
+    configuration = text[text.index("<h2>Configuration</h2>") :]
+    assert "<details><summary>config of rpr2, mixed, w_d = 0.5, ga, seed 0" in configuration
+    assert "experiment_name: rpr2_mixed" in configuration and "hydra_logging" not in configuration
 
 
 @pytest.mark.slow  # the fixture: three tiny runs with figures (~40 s on 2 busy cores)
@@ -85,3 +89,44 @@ def test_links_are_relative_to_the_page_even_for_relative_paths(tmp_path, monkey
     monkeypatch.chdir(tmp_path)
     assert _link(Path("outputs/sweeps/s/0_w_d=0/best.parquet"), Path("outputs/sweeps/s")) == "0_w_d=0/best.parquet"
     assert _link(Path("outputs/runs/r/best.parquet"), Path("reports")) == "../outputs/runs/r/best.parquet"
+
+
+def test_sweep_config_leaves_hydra_out():
+    """The report's configuration is the sweep's own config: Hydra's node (help template, logging,
+    hundreds of lines) is left out; interpolations stay as written."""
+    from pipeline.report.html import sweep_config
+
+    text = (
+        "hydra:\n  help:\n    template: 'long help text'\n  hydra_logging:\n    version: 1\n"
+        "  job_logging:\n    root: {level: INFO}\n"
+        "experiment_name: h4_mixed\nmechanism:\n  name: h4\nobjective:\n  w_d: 0.5\n"
+        "paths:\n  output_dir: ${hydra:runtime.cwd}/outputs\n"
+    )
+    out = sweep_config(text)
+    assert "hydra_logging" not in out and "template" not in out and "job_logging" not in out
+    assert out.startswith("experiment_name: h4_mixed")
+    assert "w_d: 0.5" in out and "${hydra:runtime.cwd}/outputs" in out
+
+
+def test_runs_configs_show_each_config_once_or_say_there_is_none(tmp_path):
+    import json
+
+    import pandas as pd
+
+    from pipeline.report.html import runs_configs
+
+    rows, dirs = [], {}
+    for run_id, seed in (("a", 0), ("b", 1), ("c", 2)):
+        d = tmp_path / run_id
+        d.mkdir()
+        config = {"experiment_name": "h4_pareto", "optimizer": {"name": "nsga2", "seed": seed // 2}}
+        (d / "manifest.json").write_text(json.dumps({"run_id": run_id, "config": config}))
+        dirs[run_id] = d
+        rows.append(
+            {"run_id": run_id, "mechanism": "h4", "objective": "mixed", "w_d": 0.5, "optimizer": "nsga2", "seed": seed}
+        )
+    html_text = runs_configs(pd.DataFrame(rows), dirs)
+    assert html_text.count("<details>") == 2  # runs a and b share one config
+    assert "h4, mixed, w_d = 0.5, nsga2, seed 0; h4, mixed, w_d = 0.5, nsga2, seed 1" in html_text
+    assert "experiment_name: h4_pareto" in html_text
+    assert "No config recorded" in runs_configs(pd.DataFrame(rows), {})

@@ -31,6 +31,7 @@ from urllib.parse import quote
 
 import numpy as np
 import pandas as pd
+from omegaconf import OmegaConf
 
 from kinematics import MECHANISMS
 from pipeline.errors import ConfigError, RunError
@@ -44,13 +45,21 @@ MAX_WORKSPACES = 6
 STATIC = Path(__file__).resolve().parent / "static"
 
 
+def is_dataset(source: Path) -> bool:
+    """Whether ``source`` is a dataset directory (``runs/`` and ``best/`` tables), not a sweep or run."""
+    return (Path(source) / "runs").is_dir() and (Path(source) / "best").is_dir()
+
+
 def load_sweep(source: Path) -> tuple[pd.DataFrame, pd.DataFrame, dict[str, Path], str]:
     """(best, history, run directories by run id, config text) of a sweep, run or dataset directory.
+
+    The config text is the sweep's own config (:func:`sweep_config`), "" for a folder of runs
+    without one, or a line saying what a dataset holds.
 
     A dataset is read with :func:`pipeline.store.dataset.read_dataset` (debug runs left out).
     """
     source = Path(source)
-    if (source / "runs").is_dir() and (source / "best").is_dir():  # a dataset
+    if is_dataset(source):
         purposes = DEFAULT_PURPOSES
         best = read_dataset(source, "best", purposes)
         note = ""
@@ -79,8 +88,35 @@ def load_sweep(source: Path) -> tuple[pd.DataFrame, pd.DataFrame, dict[str, Path
         raise ConfigError(
             f"source={str(source)!r} is invalid: no complete run below it; allowed: a sweep, run or dataset directory"
         )
-    config = (source / "multirun.yaml").read_text() if (source / "multirun.yaml").exists() else ""
+    config = sweep_config((source / "multirun.yaml").read_text()) if (source / "multirun.yaml").exists() else ""
     return (pd.concat(frames_best, ignore_index=True), pd.concat(frames_history, ignore_index=True), dirs, config)
+
+
+def sweep_config(text: str) -> str:
+    """A sweep's ``multirun.yaml`` without its ``hydra`` node (Hydra's help text, logging and
+    launcher settings: hundreds of lines before the study's own config; each job's overrides
+    are listed beside it), as YAML text (interpolations left as written)."""
+    config = OmegaConf.create(text)
+    if "hydra" in config:
+        del config["hydra"]
+    return OmegaConf.to_yaml(config)
+
+
+def runs_configs(best: pd.DataFrame, dirs: dict[str, Path]) -> str:
+    """The configs of the runs of a folder without a sweep config: each distinct config once
+    (collapsed, headed by the runs that used it), or a line saying none was recorded."""
+    by_config: dict[str, list[str]] = {}
+    for _, row in best.iterrows():
+        config = (read_manifest(dirs[row["run_id"]]) or {}).get("config") if row["run_id"] in dirs else None
+        if config:
+            text = OmegaConf.to_yaml(OmegaConf.create(config))
+            by_config.setdefault(text, []).append(caption(row))
+    if not by_config:
+        return "<p>No config recorded for these runs (no multirun.yaml, no run manifest with one).</p>"
+    return "".join(
+        f"<details><summary>config of {html.escape('; '.join(names))}</summary><pre>{html.escape(text)}</pre></details>"
+        for text, names in by_config.items()
+    )
 
 
 def _img(data: str, alt: str) -> str:
@@ -234,6 +270,12 @@ def build_report(source: Path, out: Path | None = None) -> str:
         for _, row in best.iterrows()
         if row["run_id"] in dirs
     )
+    if is_dataset(source):  # the line saying what it holds
+        configuration = f"<p>{html.escape(config)}</p>"
+    elif config:
+        configuration = f"<pre>{html.escape(config)}</pre>"
+    else:
+        configuration = runs_configs(best, dirs)
     style = (STATIC / "report.css").read_text()
     script = (STATIC / "report.js").read_text()
     title = html.escape(source.resolve().name)
@@ -251,7 +293,7 @@ scroll or click a figure to zoom (drag to pan, double-click to reset). Hover a r
 <h2>Convergence</h2>{_img(convergence_figure(best, history), "convergence")}
 {"<h2>Pareto fronts</h2>" + fronts if fronts else ""}
 <h2>Workspaces of the best designs</h2>{galleries(best, dirs) or "<p>No figures (plot.enabled=false).</p>"}
-<h2>Configuration</h2><pre>{html.escape(config)}</pre><ul>{overrides}</ul>
+<h2>Configuration</h2>{configuration}<ul>{overrides}</ul>
 <script>{script}</script>
 </body></html>
 """
