@@ -146,7 +146,9 @@ class History:
 
     Progress: on a terminal, one tqdm bar (generations, evaluations/s, ETA,
     best so far); otherwise (CI, SLURM, a log file) one log line about every
-    10 % of the expected generations. Every generation is logged at DEBUG.
+    10 % of the expected generations, with the best so far (and the
+    generation's best) and the evaluation rate since the first generation (the
+    first generation's time includes start-up). Every generation is logged at DEBUG.
     """
 
     def __init__(self, expected_generations: int | None = None, label: str = "") -> None:
@@ -185,9 +187,14 @@ class History:
         self._progress(row)
 
     def _progress(self, row: dict) -> None:
-        elapsed = row["wall_time"]
         evaluations = sum(r["n_evaluations"] for r in self.rows)
-        rate = evaluations / elapsed if elapsed > 0 else math.inf
+        # best so far: a generation's best drops (an IPOP restart's wide population) without the
+        # run losing anything; the rate runs from the first generation's end, so it leaves out the
+        # start-up (process pool, compilation) that the first generation's time includes
+        so_far = max(r["best"] for r in self.rows)
+        first = self.rows[0]
+        since = row["wall_time"] - first["wall_time"]
+        rate = (evaluations - first["n_evaluations"]) / since if since > 0 else math.nan
         log.debug(
             "%sgeneration %d: best %.6g, mean %.6g, %d evaluations",
             self.label,
@@ -199,7 +206,10 @@ class History:
         if self._bar is not None:
             if row["generation"] > 0:
                 self._bar.update(1)
-            self._bar.set_postfix(best=f"{row['best']:.5g}", evals_s=f"{rate:.0f}", refresh=False)
+            postfix = {"best_so_far": f"{so_far:.5g}"}
+            if math.isfinite(rate):
+                postfix["evals_s"] = f"{rate:.0f}"
+            self._bar.set_postfix(postfix, refresh=False)
             return
         gen, total = row["generation"], self.expected
         if total:
@@ -208,7 +218,19 @@ class History:
                 return
             self._last_logged = gen // step
         of = f"/{total}" if total else ""
-        log.info("%sgeneration %d%s: best %.6g, %.0f evaluations/s", self.label, gen, of, row["best"], rate)
+        if len(self.rows) == 1:
+            speed = f"{evaluations} evaluations in {row['wall_time']:.2g} s (with start-up)"
+        else:
+            speed = f"{rate:.0f} evaluations/s after the first generation"
+        log.info(
+            "%sgeneration %d%s: best so far %.6g (this generation %.6g), %s",
+            self.label,
+            gen,
+            of,
+            so_far,
+            row["best"],
+            speed,
+        )
 
     def frame(self) -> pd.DataFrame:
         """The rows as a DataFrame (closes the progress bar: the run is over)."""
