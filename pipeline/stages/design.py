@@ -1,7 +1,7 @@
 """One given design, evaluated: V, GDI, SURI and η of design variables a user types in.
 
 ``pm-design evaluate mechanism=h4 d_ratio=0.135 h_ratio=0.139 Qz_ratio=0.352``
-(:mod:`pipeline.cli.commands`) calls :func:`evaluate_design`; the numbers are the
+(:mod:`pipeline.cli.evaluate`) calls :func:`evaluate_design`; the numbers are the
 ones the optimise stage reports for an optimum (same evaluator, same grid
 rules), so a design read off a paper or a dataset can be checked alone.
 """
