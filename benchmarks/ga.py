@@ -243,6 +243,15 @@ def main() -> None:
                 "",
                 *dispatch_comparison(batches, args.repeats, args.old_ref, scratch),
             ]
+        if not args.compile_ahead:
+            sections += [
+                "",
+                "## Compile-ahead helper (removed)",
+                "",
+                "Not re-measured in this run (`--compile-ahead` times it at the old commit). It was "
+                "removed at 65c37b2 when the main job from an empty numba cache, with and without it, "
+                "measured off/on = 0.92 (median of 5; criterion to keep it >= 1.2); see this page's history.",
+            ]
         if args.compile_ahead:
             sections += [
                 "",
