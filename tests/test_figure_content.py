@@ -209,7 +209,8 @@ def assert_titles_fit(fig: Figure) -> None:
 @pytest.mark.parametrize("name", sorted(MECHANISMS))
 def test_run_figure_titles_fit_for_every_mechanism(name, tmp_path, saved, monkeypatch):
     """A Gough-Stewart slice names five fixed pose variables: the title must wrap, not run off the
-    figure or under the colour bar (coarse slices: the titles are what is tested)."""
+    figure or under the colour bar (coarse slices: the titles are what is tested; convergence and
+    Pareto titles: test_convergence_shows_the_polished_optimum)."""
     from pipeline.stages import slices
 
     monkeypatch.setattr(slices, "SLICE_RESOLUTION", 10)
@@ -225,11 +226,7 @@ def test_run_figure_titles_fit_for_every_mechanism(name, tmp_path, saved, monkey
         what,
         design_volume="design's V = 7.25346e+07 mm³",
     )
-    history = pd.DataFrame({"generation": range(3), "best": [0.1, 0.2, 0.3], "mean": [0.1, 0.15, 0.2]})
-    plot_module.plot_convergence(history, tmp_path / "c.png", f"cmaes convergence ({what})", "η [1]")
-    front = pd.DataFrame({"gdi": [0.1, 0.2], "suri": [0.3, 0.1]})
-    plot_module.plot_front(front, ["gdi", "suri"], tmp_path / "f.png", what)
-    assert len(saved) == 4
+    assert len(saved) == 2
     assert "7.25346e+07 mm³" in saved[1].axes[0].get_title()  # whole, on one line
     for fig in saved:
         assert_titles_fit(fig)
@@ -253,6 +250,10 @@ def test_convergence_shows_the_polished_optimum(tmp_path, saved):
     ax = saved[-1].axes[0]
     legend = [t.get_text() for t in ax.get_legend().get_texts()]
     assert "after polish: 0.274225" in legend
+    what = "gough_stewart, mixed, w_d = 0.5, seed 0"  # the longest mechanism name: titles fit too
+    plot_module.plot_convergence(history, tmp_path / "c2.png", f"cmaes convergence ({what})", "η [1]")
+    front = pd.DataFrame({"gdi": [0.1, 0.2], "suri": [0.3, 0.1]})
+    plot_module.plot_front(front, ["gdi", "suri"], tmp_path / "f.png", what)
     assert any("gap 2.06 %" in text for text in legend)  # (0.28 - 0.274225) / 0.28, not from 0.2714
     assert max(max(line.get_ydata()) for line in ax.lines) == pytest.approx(0.28)
     assert any(0.274225 in list(line.get_ydata()) for line in ax.lines)
@@ -275,3 +276,30 @@ def test_convergence_shows_the_polished_optimum(tmp_path, saved):
     for fig in saved:
         check_figure(fig)
         assert_titles_fit(fig)
+
+
+def test_groups_of_runs_keep_experiments_apart(saved):
+    """Two experiments with one optimiser at one w_d (e.g. h4_mixed and a study of its own) are
+    two groups: two convergence lines and two rows of the seeds table, never each other's seeds."""
+    from pipeline.report.figures import convergence_figure
+    from pipeline.report.html import seeds_table
+
+    best = pd.DataFrame(
+        {
+            "run_id": ["a", "b"],
+            "mechanism": ["h4"] * 2,
+            "objective": ["mixed"] * 2,
+            "objective_unit": ["1"] * 2,
+            "w_d": [0.5] * 2,
+            "optimizer": ["ga"] * 2,
+            "experiment": ["h4_mixed", "h4_own"],
+            "seed": [0, 1],
+            "objective_value": [0.19, 0.2],
+        }
+    )
+    history = pd.DataFrame({"run_id": ["a", "a", "b", "b"], "generation": [0, 1] * 2, "best": [0.18, 0.19, 0.19, 0.2]})
+    convergence_figure(best, history)
+    legend = [t.get_text() for t in saved[-1].axes[0].get_legend().get_texts()]
+    assert legend == ["ga / h4_mixed, w_d=0.5 (1 seed)", "ga / h4_own, w_d=0.5 (1 seed)"]
+    table = seeds_table(best)
+    assert table.count("<tr><td>h4</td>") == 2 and "<td>h4_own</td>" in table

@@ -63,7 +63,9 @@ def test_report_table_units_gaps_captions_and_seeds(sweep):
     assert "gap to reference [%]" in text
     assert "rpr2, mixed, w_d = 0.5, ga, seed 0" in text  # captions name what a run is
     # the repeat of seed 0 is counted once: 3 runs, 2 distinct seeds, 1 repeat
-    row = re.search(r"<tr><td>rpr2</td><td>mixed</td><td>0.5</td><td>ga</td>(.*?)</tr>", text).group(1)
+    row = re.search(r"<tr><td>rpr2</td><td>mixed</td><td>0.5</td><td>ga</td><td>rpr2_mixed</td>(.*?)</tr>", text).group(
+        1
+    )
     assert re.findall(r"<td>([^<]*)</td>", row)[:4] == ["3", "2", "0, 1", "1"]
     assert '<meta name="viewport"' in text and "overflow-x: auto" in text
     assert "<script src=" not in text and "https://" not in text  # offline: nothing fetched

@@ -1,7 +1,7 @@
 """The report's figures: convergence per group of runs, and workspace galleries on one colour scale.
 
 Each returns a PNG as base64 text (embedded in ``report.html``). Groups of runs
-are (mechanism, objective, w_d, optimizer); statistics run over *distinct seeds*
+are (mechanism, objective, w_d, optimizer, experiment); statistics run over *distinct seeds*
 (:func:`pipeline.stages.plot.distinct_seeds`): a study run again with the same
 seed is a repeat, not a new sample.
 """
@@ -21,7 +21,13 @@ from pipeline.stages.slices import draw_slice, symbol, workspace_slice
 
 log = logging.getLogger(__name__)
 
-GROUP_KEYS = ["mechanism", "objective", "w_d", "optimizer"]
+#: what makes runs one group (their seeds are samples of one study); "experiment" where recorded
+GROUP_KEYS = ["mechanism", "objective", "w_d", "optimizer", "experiment"]
+
+
+def group_keys(frame: pd.DataFrame) -> list[str]:
+    """The :data:`GROUP_KEYS` that ``frame`` has (older tables have no "experiment")."""
+    return [k for k in GROUP_KEYS if k in frame.columns]
 
 
 def png(fig) -> str:
@@ -47,8 +53,9 @@ def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
     generation: a restarting optimiser (IPOP-CMA-ES) starts each restart from a wide population,
     whose best drops without anything being lost. One panel per mechanism because the objective's
     scale differs between mechanisms (η of a 2-RPR near 0.8, of an H4 near 0.2)."""
-    runs = distinct_seeds(best, GROUP_KEYS)
-    groups = runs[["run_id", *GROUP_KEYS]].merge(history[["run_id", "generation", "best"]], on="run_id")
+    keys = group_keys(best)
+    runs = distinct_seeds(best, keys)
+    groups = runs[["run_id", *keys]].merge(history[["run_id", "generation", "best"]], on="run_id")
     # every objective is maximised (pipeline.objectives)
     groups["best"] = groups.sort_values("generation").groupby("run_id")["best"].cummax()
     panels = sorted({(str(o), str(m)) for o, m in zip(groups["objective"], groups["mechanism"])})
@@ -56,10 +63,12 @@ def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
     for ax, (objective, mechanism) in zip(axes, panels):
         part = groups[(groups["objective"].astype(str) == objective) & (groups["mechanism"].astype(str) == mechanism)]
         references_drawn = False
-        for key, frame in part.groupby(GROUP_KEYS, sort=True):
+        for key, frame in part.groupby(keys, sort=True):
+            group = dict(zip(keys, key))
             stats = frame.groupby("generation")["best"].agg(["mean", "min", "max"])
             n_seeds = frame["run_id"].nunique()
-            label = f"{key[3]}" + (f", w_d={key[2]:g}" if objective == "mixed" else "")
+            label = " / ".join(str(group[k]) for k in ("optimizer", "experiment") if str(group.get(k, "")))
+            label += f", w_d={group['w_d']:g}" if objective == "mixed" else ""
             label += f" ({n_seeds} seed{'s' if n_seeds > 1 else ''})"
             (line,) = ax.plot(stats.index, stats["mean"], label=label)
             ax.fill_between(stats.index, stats["min"], stats["max"], alpha=0.2, color=line.get_color())

@@ -35,7 +35,7 @@ from omegaconf import OmegaConf
 
 from kinematics import MECHANISMS
 from pipeline.errors import ConfigError, RunError
-from pipeline.report.figures import GROUP_KEYS, caption, convergence_figure, workspace_gallery
+from pipeline.report.figures import caption, convergence_figure, group_keys, workspace_gallery
 from pipeline.stages.plot import plot_tradeoff, symbol
 from pipeline.store.dataset import DEFAULT_PURPOSES, read_dataset
 from pipeline.store.runs import MANIFEST, read_manifest
@@ -212,12 +212,12 @@ def optima_table(best: pd.DataFrame, dirs: dict[str, Path], base: Path) -> str:
 
 def seeds_table(best: pd.DataFrame) -> str:
     """Runs per group: distinct seeds (statistics run over these) and repeats of one seed."""
-    rows = []
-    for key, frame in best.groupby(GROUP_KEYS, sort=True):
+    rows, keys = [], group_keys(best)
+    for key, frame in best.groupby(keys, sort=True):
         n_runs, n_seeds = len(frame), frame["seed"].nunique()
         seeds = ", ".join(str(s) for s in sorted(frame["seed"].unique()))
         rows.append("<tr>" + "".join(_cell(v) for v in (*key, n_runs, n_seeds, seeds, n_runs - n_seeds)) + "</tr>")
-    header = "".join(f"<th>{h}</th>" for h in (*GROUP_KEYS, "runs", "distinct seeds", "seeds", "repeats of a seed"))
+    header = "".join(f"<th>{h}</th>" for h in (*keys, "runs", "distinct seeds", "seeds", "repeats of a seed"))
     return (
         f'<div class="scroll"><table class="sortable"><thead><tr>{header}</tr></thead>'
         f"<tbody>{''.join(rows)}</tbody></table></div>"
