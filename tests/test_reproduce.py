@@ -40,6 +40,8 @@ def test_upper_hull_drops_concave_points():
 
 
 TINY = ("+debug=fast", "optimizer.population=4", "optimizer.generations=2")
+#: tiny sizes of mixed_tradeoff's optimiser (IPOP-CMA-ES + polish)
+TINY_CMAES = ("+debug=fast", "optimizer.max_evaluations=12", "optimizer.scout=4", "optimizer.polish_evaluations=4")
 
 
 def test_experiment_runs_its_declared_sweep_into_one_dataset_and_is_cached(tmp_path):
@@ -49,12 +51,14 @@ def test_experiment_runs_its_declared_sweep_into_one_dataset_and_is_cached(tmp_p
     from pipeline.reproduction.driver import Reproduction
 
     side = Reproduction(tmp_path / "doc", tmp_path / "outputs")
-    side.run_experiments([("mixed_tradeoff", TINY), ("mixed_tradeoff", TINY)])  # one batch; the repeat ignored
+    side.run_experiments(
+        [("mixed_tradeoff", TINY_CMAES), ("mixed_tradeoff", TINY_CMAES)]
+    )  # one batch; the repeat ignored
     computed = side.computed
     assert computed >= 9  # every job computed at least its optimisation
-    first = side.experiment("mixed_tradeoff", TINY)  # read back, not run again
+    first = side.experiment("mixed_tradeoff", TINY_CMAES)  # read back, not run again
     assert side.computed == computed and len(list(side.runs_dir.rglob("manifest.json"))) == 9
-    assert side.experiment("mixed_tradeoff", TINY)["run_id"].tolist() == first["run_id"].tolist()
+    assert side.experiment("mixed_tradeoff", TINY_CMAES)["run_id"].tolist() == first["run_id"].tolist()
     assert len(side.runs) == 1  # each experiment once in the document's list of optima
     # the declared sweep: 3 mechanisms x 3 w_d, Hydra's job order (first parameter outermost)
     assert first["mechanism"].tolist() == ["tricept"] * 3 + ["rpr3"] * 3 + ["rpr2"] * 3
@@ -71,13 +75,13 @@ def test_experiment_runs_its_declared_sweep_into_one_dataset_and_is_cached(tmp_p
     assert history["run_id"].unique().tolist() == first["run_id"].tolist()[:2]
     # a second document recomputes nothing and reads the same numbers; one worker per study or two alike
     again = Reproduction(tmp_path / "doc", tmp_path / "outputs")
-    second = again.experiment("mixed_tradeoff", TINY)
+    second = again.experiment("mixed_tradeoff", TINY_CMAES)
     assert again.computed == 0
     columns = ["mechanism", "w_d", "volume", "gdi", "suri", "objective_value"]
     assert second[columns].equals(first[columns])
     alone = Reproduction(tmp_path / "doc2", tmp_path / "other")
     alone_rows = [
-        alone.experiment("mixed_tradeoff", (*TINY, f"mechanism={m}", f"objective.w_d={w}")).iloc[0]
+        alone.experiment("mixed_tradeoff", (*TINY_CMAES, f"mechanism={m}", f"objective.w_d={w}")).iloc[0]
         for m, w in (("rpr2", 1.0), ("tricept", 0.0))
     ]
     assert alone_rows[0][columns].equals(first.iloc[8][columns])

@@ -99,7 +99,7 @@ def extensions(r: Reproduction, h4_sweep_table: pd.DataFrame, best_runs: dict[st
     r.add(f"""
 ## Extensions
 
-### The mixed-index trade-off for the Tricept, 3-RPR and 2-RPR (GA 20 × 30, seed 0)
+### The mixed-index trade-off for the Tricept, 3-RPR and 2-RPR (IPOP-CMA-ES + polish, seed 0)
 
 ![trade-off]({r.figure("ext_tradeoff.png")})
 
