@@ -9,32 +9,27 @@ is measured), the evaluations it used and the evaluations it needed to come with
 max(0.1 %, the best known's estimated error).
 
 Optimisers: the paper GA (30 x 150, as in seed 000), DE (the same budget), and the recommended
-optimiser, IPOP-CMA-ES + polish (``optimizer=cmaes``). ``--quick`` skips GA and DE. Then the wall
-time of the main job (``+experiment=h4_mixed``, paper GA + reference) against
-``+experiment=h4_design`` (CMA-ES + polish), each from an empty cache, on 2 workers, in this run.
-The 10-seed table of the recommended optimiser is benchmarks/optimiser_seeds.py's.
+optimiser, IPOP-CMA-ES + polish (``optimizer=cmaes``). ``--quick`` skips GA and DE. The wall time
+of the paper GA's main job against ``h4_design`` is measured in one place, benchmarks/speed.py
+(section 4b of docs/benchmarks_speed.md). The 10-seed table of the recommended optimiser is benchmarks/optimiser_seeds.py's.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
-import tempfile
 import time
 from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
-from hydra import compose, initialize_config_dir
 
 from benchmarks.best_known import PROBLEMS, adopt, load, make_problem
-from pipeline.config import CONFIG_DIR, register_configs
 from pipeline.optimizers.base import Problem
 from pipeline.optimizers.cmaes import CMAES, CMAESConfig
 from pipeline.optimizers.de import DE, DEConfig
 from pipeline.optimizers.ga import GA, GAConfig
 from pipeline.optimizers.polish import polish
-from pipeline.study import run_study
 
 SEEDS = (0, 1, 2)
 #: the issue's success criterion: within max(0.1 %, the best known's error), <= 1,000 evaluations
@@ -88,27 +83,6 @@ def run_optimisers(factory, quick: bool) -> list[tuple[str, int, float, int, lis
     return runs
 
 
-def main_job_times() -> dict[str, float]:
-    register_configs()
-    out = {}
-    for experiment in ("h4_mixed", "h4_design"):
-        with tempfile.TemporaryDirectory() as tmp:
-            with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3"):
-                cfg = compose(
-                    config_name="config",
-                    overrides=[
-                        f"+experiment={experiment}",
-                        f"paths.output_dir={tmp}",
-                        "plot.enabled=false",
-                        "purpose=benchmark",
-                    ],
-                )
-            start = time.perf_counter()
-            run_study(cfg, Path(tmp) / "run")
-            out[experiment] = time.perf_counter() - start
-    return out
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="CMA-ES only (skip the GA and DE runs)")
@@ -154,15 +128,10 @@ def main() -> None:
         f"worst gap {100 * max(s[1] for s in summary):.4f} %, most evaluations {max(s[3] for s in summary)}: "
         f"{'met' if met else 'NOT met'}",
     ]
-    times = main_job_times()
-    ratio = times["h4_design"] / times["h4_mixed"]
     lines += [
         "",
-        "## Main job from an empty cache (2 workers, no plots)",
-        "",
-        f"h4_mixed (paper GA + reference) {times['h4_mixed']:.1f} s, h4_design (CMA-ES + polish) "
-        f"{times['h4_design']:.1f} s, ratio {ratio:.2f}. Load average when done: "
-        f"{', '.join(f'{x:.1f}' for x in os.getloadavg())}.",
+        "The wall time of the main job (paper GA) against `h4_design` (CMA-ES + polish) is measured by "
+        "`python -m benchmarks.speed`: [benchmarks_speed.md](benchmarks_speed.md), section 4b.",
     ]
     text = "\n".join(lines) + "\n"
     print(text)
