@@ -333,6 +333,24 @@ class Mechanism(ABC):
         """
         return None
 
+    #: the pose variable along which :meth:`exact_sections` integrates in closed form, if any
+    section_axis: ClassVar[int | None] = None
+
+    def exact_sections(
+        self, poses: np.ndarray, origin: float, step: float, min_inverse_condition: float, length: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int] | None:
+        """Optional exact 1-D sections of the workspace along :attr:`section_axis`.
+
+        For each row of ``poses`` (N, dof) (its value in the section column ignored):
+        the measure of the dexterous section (``1/kappa > min_inverse_condition``; the section's
+        reachable intervals in closed form), the integral of ``1/kappa`` over it, the extremes
+        of ``1/kappa`` over its samples and the number of Jacobians evaluated; ``1/kappa`` is
+        sampled at the intervals' ends and at the nodes ``origin + k step``. Used by
+        ``workspace.evaluate(method="grid")`` in place of the cut-cell grid (3-RPR:
+        :meth:`kinematics.rpr3.RPR3.exact_sections`). ``None`` (the default): no such sections.
+        """
+        return None
+
     def volume_unit(self, orientation: tuple[float, float] | None = None, fixed: dict[str, float] | None = None) -> str:
         """Unit of the workspace volume over the pose variables not in ``fixed``.
 
@@ -368,6 +386,48 @@ class Mechanism(ABC):
     def within_joint_limits(self, poses: np.ndarray) -> np.ndarray:
         """Passive-joint limits (N,) bool; True for mechanisms without such limits."""
         return np.ones(np.asarray(poses).shape[0], dtype=bool)
+
+    def constraint_margins(self, poses: np.ndarray) -> np.ndarray | None:
+        """Signed margins of the reachability constraints of each pose, if the mechanism has them.
+
+        A margin is a smooth function of the pose, ``>= 0`` exactly where its
+        constraint holds (actuator range, passive-joint limit, real inverse
+        kinematics); the pose is reachable (real IK within the actuator range and
+        the joint limits, as :func:`kinematics.workspace.membership` tests it) exactly
+        where every margin is ``>= 0``. Each column may carry its own unit (only its
+        sign and its linear interpolation between two poses are used): the grid
+        method of :func:`kinematics.workspace.evaluate` places a reachability boundary
+        on a grid edge where the margins, interpolated linearly between the edge's
+        ends, first change sign: a crossing continuous in the design, at no further
+        evaluation (docs/accuracy.md).
+
+        Parameters
+        ----------
+        poses : ndarray, shape (N, dof)
+
+        Returns
+        -------
+        ndarray, shape (N, K), or None
+            NaN where a margin is undefined (e.g. an imaginary IK root); None (the
+            default) when the mechanism has no margins: the grid method then locates
+            its boundary crossings by bisection of the membership test.
+        """
+        return None
+
+    def exact_axis_margins(self, poses: np.ndarray, axis_lo: float, axis_hi: float) -> np.ndarray | None:
+        """:meth:`constraint_margins` of the columns of the exact axis (see
+        :meth:`invariant_axis_interval`): a column is in the workspace's reachable part where
+        every margin is ``>= 0``, the first being the length of its feasible interval clipped
+        to ``[axis_lo, axis_hi]`` (NaN where it is empty for an imaginary root). None (the
+        default): no margins."""
+        return None
+
+    def _actuator_margins(self, poses: np.ndarray) -> np.ndarray:
+        """``q - q_lo`` and ``q_hi - q`` (N, 2 dof) of :meth:`inverse` and :attr:`actuator_range`
+        (unit of the actuators; NaN where the IK has no real root)."""
+        q = self.inverse(poses)
+        q_lo, q_hi = self.actuator_range
+        return np.hstack([q - q_lo, q_hi - q])
 
     @classmethod
     def param_unit(cls, name: str, value: object) -> str:

@@ -189,6 +189,18 @@ class Delta(Mechanism):
         _, y_leg, _ = self._leg_frame(poses)
         return np.all(np.abs(y_leg) <= self.lb * math.sin(math.radians(self.passive_limit)), axis=1)
 
+    def constraint_margins(self, poses: np.ndarray) -> np.ndarray:
+        """Margins of reachability (N, 15): ``rho_i - c_i`` and ``rho_i + c_i`` (mm^2; the
+        elbow closes, ``|c_i| <= rho_i``, in the terms of :meth:`_inverse`), the actuator
+        range ``theta_i - theta_min``, ``theta_max - theta_i`` (rad; NaN where the leg cannot
+        close) and the forearm limit ``lb sin(passive_limit) - |y_i|`` (mm)."""
+        poses = self._check_poses(poses)
+        u, y_leg, z = self._leg_frame(poses)
+        rho = np.hypot(2.0 * self.la * u, 2.0 * self.la * z)
+        c = u**2 + y_leg**2 + z**2 + self.la**2 - self.lb**2
+        side = self.lb * math.sin(math.radians(self.passive_limit))
+        return np.hstack([rho - c, rho + c, self._actuator_margins(poses), side - np.abs(y_leg)])
+
     # ------------------------------------------------------------- kernels
     def _leg_frame(self, poses: np.ndarray):
         """``u = x_i - (R - r)``, ``y_i`` (each (N, 3)) and z (N, 1), mm."""

@@ -436,6 +436,32 @@ class GoughStewart(Mechanism):
             plat <= math.radians(self.cone_platform), axis=1
         )
 
+    def constraint_margins(self, poses: np.ndarray) -> np.ndarray:
+        """Margins of the leg range, ``q_i - q_min`` and ``q_max - q_i`` (mm), and of the cone
+        limits, ``cos(angle) - cos(limit)`` of each base and platform cone angle
+        (:meth:`cone_angles`; >= 0 exactly where the angle is within its limit): (N, 24);
+        legs are always real."""
+        poses = self._check_poses(poses)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            _, legs = self._legs(poses)
+            q = np.sqrt(np.einsum("nki,nki->nk", legs, legs))
+            unit = legs / q[..., None]
+            rot = rotation(poses)
+            base = np.einsum("nki,ki->nk", unit, self.base_axes)
+            if _one_orientation(poses):
+                plat = unit @ (rot[0] @ self.platform_axes.T)  # (N, 6, 6): the diagonal is wanted
+                plat = np.einsum("nkk->nk", plat)
+            else:
+                plat = np.einsum("nki,nki->nk", unit, np.einsum("nij,kj->nki", rot, self.platform_axes))
+        return np.hstack(
+            [
+                q - self.q_min,
+                self.q_max - q,
+                base - math.cos(math.radians(self.cone_base)),
+                plat - math.cos(math.radians(self.cone_platform)),
+            ]
+        )
+
     def reachable_inverse_condition(self, poses: np.ndarray, length: float | None = None) -> np.ndarray | None:
         """Compiled membership test (see the base class): IK, leg range, cone limits and
         ``J diag(s)`` per pose in one loop (:func:`_reachable_jacobians`), then ``1/kappa`` of the

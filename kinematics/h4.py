@@ -271,6 +271,28 @@ class H4(Mechanism):
         reachable = row_all(np.isfinite(drop))
         return 2, np.where(reachable, lower, np.inf), np.where(reachable, upper, -np.inf)
 
+    def exact_axis_margins(self, poses: np.ndarray, axis_lo: float, axis_hi: float) -> np.ndarray:
+        """Margins of an (x, y, theta) column (N, 28): its feasible z interval of eq. 11,
+        ``max_j(-s_j) <= z <= min_i(stroke - s_i)`` clipped to ``[axis_lo, axis_hi]``
+        (:meth:`invariant_axis_interval`), is non-empty exactly where every pair of its bounds
+        is ordered: ``stroke - s_i + s_j`` (i != j), ``stroke - s_i - axis_lo`` and
+        ``axis_hi + s_j`` (cm); then each rod's reach ``M_i^2 - dx_i^2 - dy_i^2`` (cm^2, eq. 11's
+        radicand) and the ball-joint limit ``M_i sin(limit) - |(dx_i, dy_i)|`` (cm; +inf
+        without a limit). Each is smooth (the interval's length, a min minus a max, is not);
+        where a radicand is negative its root ``s_i`` is continued as ``-sqrt(-radicand)``, so
+        the bounds stay continuous across the reach boundary."""
+        poses = self._check_poses(poses)
+        dx, dy, _, _ = self._horizontal(poses)
+        radicand = self.M**2 - dx**2 - dy**2
+        drop = np.sign(radicand) * np.sqrt(np.abs(radicand))
+        i, j = np.nonzero(~np.eye(4, dtype=bool))
+        pairs = self.stroke - drop[:, i] + drop[:, j]
+        if self.ball_joint_limit is None:
+            joints = np.full((poses.shape[0], 4), np.inf)
+        else:
+            joints = self.M * np.sin(np.radians(self.ball_joint_limit)) - np.hypot(dx, dy)
+        return np.hstack([pairs, self.stroke - drop - axis_lo, axis_hi + drop, radicand, joints])
+
     def exact_axis_columns(
         self, poses: np.ndarray, axis_lo: float, axis_hi: float, length: float | None = None
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:

@@ -88,6 +88,11 @@ class RPR2(Mechanism):
         """``q_min <= q_i <= q_max`` (mm)."""
         return np.full(2, self.q_min), np.full(2, self.q_max)
 
+    def constraint_margins(self, poses: np.ndarray) -> np.ndarray:
+        """``q_i - q_min`` and ``q_max - q_i`` (N, 4), mm (eq. 1-2): the only reachability
+        constraints (every pose has real leg lengths)."""
+        return self._actuator_margins(self._check_poses(poses))
+
     # ------------------------------------------------------------- kernels
     def _inverse(self, poses: np.ndarray) -> np.ndarray:
         """Algebraic model, eq. 1-2: ``q_1 = sqrt(x^2 + y^2)``, ``q_2 = sqrt((b - x)^2 + y^2)``."""

@@ -309,6 +309,34 @@ class Tricept(Mechanism):
             plat = np.arccos(np.clip(np.einsum("nki,nki->nk", unit, moved), -1.0, 1.0))
         return base, plat
 
+    def constraint_margins(self, poses: np.ndarray) -> np.ndarray:
+        """Margins of the actuator range and :meth:`within_joint_limits` (N, K): ``q_i - q_min``,
+        ``q_max - q_i`` (mm, eq. 1-5), ``cos(angle) - cos(cone)`` of each limited joint's cone
+        angle (:meth:`cone_angles`; >= 0 exactly where the angle is within the limit) and
+        ``cos(tilt) - cos(tilt_limit)`` of the central joint; legs are always real. The legs
+        are computed once (this runs on every grid edge the workspace boundary crosses)."""
+        poses = self._check_poses(poses)
+        rot = self._rotation(poses[:, 1], poses[:, 2])
+        legs = (rot @ self.p.T).transpose(0, 2, 1) - self.base
+        legs[..., 2] += poses[:, 0:1]
+        q = np.sqrt(np.einsum("nki,nki->nk", legs, legs))
+        parts = [q - self.q_min, self.q_max - q]
+        if self.cone_joints != "none":
+            unit = legs / q[..., None]
+            if self.cone_reference == "normal":
+                base, plat = unit[..., 2], np.einsum("nki,ni->nk", unit, rot[:, :, 2])
+            else:
+                base = np.einsum("nki,ki->nk", unit, self._home_axes)
+                plat = np.einsum("nki,nki->nk", unit, np.einsum("nij,kj->nki", rot, self._home_axes))
+            limit = math.cos(self.cone_limit)
+            if self.cone_joints in ("both", "base"):
+                parts.append(base - limit)
+            if self.cone_joints in ("both", "platform"):
+                parts.append(plat - limit)
+        if self.tilt_limit is not None:
+            parts.append((np.cos(poses[:, 1]) * np.cos(poses[:, 2]) - math.cos(math.radians(self.tilt_limit)))[:, None])
+        return np.hstack(parts)
+
     # ------------------------------------------------------------- kernels
     def _inverse(self, poses: np.ndarray) -> np.ndarray:
         """Leg lengths ``q_i = |R (p_i + d k) + c k - b_i|`` (eq. 1-5, from the geometry)."""

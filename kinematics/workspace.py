@@ -20,22 +20,25 @@ orientation range; and dexterity ``1/kappa > min_inverse_condition`` (0.01,
 seed 000 Sec. 4.4; 0 disables it, as the planar papers define their
 workspaces).
 
-Integration, ``method="midpoint"`` (the default): the plain cell-centre count on a
-regular grid (first order; it moves in steps as the boundary crosses cell centres).
-``method="grid"`` (docs/accuracy.md): a regular grid
+Integration, ``method="grid"`` (the default; docs/accuracy.md): a regular grid
 with ``resolution`` nodes per sampled axis over the part of the box the
 workspace occupies (found on a grid of half the resolution), each node owning
 its cell. A cell that the workspace boundary cuts counts with the fraction of
 it inside: the boundary crossings on the grid edges next to the node are
-located by bisection, the boundary is taken as the plane through the nearest
+located on the workspace's margins (:func:`_bisect`: the mechanism's
+reachability margins, :meth:`~kinematics.base.Mechanism.constraint_margins`, and
+``1/kappa^2`` against the dexterity limit, each interpolated through three points
+of the edge; a mechanism without margins is bisected), the boundary is taken as the plane through the nearest
 crossing along each axis and the fraction and centroid of the cut cell follow
 in closed form; the integrand of a cut cell is taken at that centroid. Exact
 for a planar boundary and second order for a smooth one, and continuous in the
-design (no step when the boundary crosses a node), but 3-5x the cost of the
-midpoint count at each mechanism's default (docs/accuracy.md: 2-RPR 1.5x), so it
-is not yet the default: the pipeline's budgets and speed targets are set for
-the midpoint count. Its default resolution is the mechanism's ``grid_nodes``
-budget where set (H4 27^3, Tricept 28^3, Delta 26^3), else ``default_nodes``. Where a mechanism has an axis along which nothing
+design (no step when the boundary crosses a node); it costs 2-5x the plain
+count at each mechanism's default (docs/accuracy.md). Its default resolution
+is the mechanism's ``grid_nodes`` budget where set (H4 27^3, Tricept 28^3,
+Delta 26^3), else ``default_nodes``. ``method="midpoint"``: the plain
+cell-centre count on a regular grid of ``default_nodes`` (first order; it moves
+in steps as the boundary crosses cell centres), the objective of earlier
+versions, kept for comparison. Where a mechanism has an axis along which nothing
 but the actuator range changes (H4: z, since all carriages slide along z and
 the Jacobian of eq. 33 does not depend on z), that axis is integrated exactly
 from the feasible interval
@@ -43,6 +46,10 @@ from the feasible interval
 estimate (``volume_error``, ``gdi_error``) is the change against the same
 method at half the resolution (grid) or on the grid shifted by half a cell
 (midpoint).
+A mechanism that provides exact 1-D sections (:meth:`~kinematics.base.Mechanism.exact_sections`,
+3-RPR along x) is integrated by them under ``method="grid"`` instead
+(:func:`_integrate_sections`): each section's intervals in closed form, ``1/kappa`` by the
+corrected trapezoid rule along it, a sheared midpoint rule across (y, phi).
 ``method="polar"`` is the Tricept paper's boundary search (seed 001 Sec. 4.1).
 
 Default orientation ranges (``orientation=None``) are the mechanism's
@@ -298,15 +305,15 @@ def default_resolution(
     mechanism: Mechanism,
     orientation: tuple[float, float] | None = None,
     fixed: dict[str, float] | None = None,
-    method: str = "midpoint",
+    method: str = "grid",
 ) -> int:
-    """Largest resolution whose grid has at most ``mechanism.default_nodes`` nodes
-    (``method="grid"``: ``mechanism.grid_nodes`` when the mechanism sets it).
+    """Largest resolution whose grid has at most ``mechanism.grid_nodes`` nodes (the grid
+    method, the default) or ``mechanism.default_nodes`` (``method="midpoint"``, or a
+    mechanism without a grid budget).
 
-    The node budgets (class attributes of each mechanism) keep a GA run of
-    4,500 evaluations near a minute on 2 workers; the grid method's budgets are
-    where its V, GDI and eta come within about 0.1 % of their converged values
-    on the designs of benchmarks/accuracy.py (docs/accuracy.md).
+    The grid method's budgets are where its V, GDI and eta come within about 0.1 % of
+    their converged values on the designs of benchmarks/accuracy.py (docs/accuracy.md);
+    the midpoint budgets kept a GA run of 4,500 evaluations near a minute on 2 workers.
     """
     if orientation is None:
         orientation = mechanism.default_orientation
@@ -351,6 +358,15 @@ class _PointValues:
             np.all(np.asarray(box[0])[angular] >= orientation[0])
             and np.all(np.asarray(box[1])[angular] <= orientation[1])
         )
+
+    def margins(self, poses: np.ndarray) -> np.ndarray | None:
+        """The mechanism's reachability margins of ``poses`` (N, K), or None when it has none
+        (:meth:`~kinematics.base.Mechanism.constraint_margins`; for an exact axis those of
+        the columns, :meth:`~kinematics.base.Mechanism.exact_axis_margins`)."""
+        self.count += poses.shape[0]
+        if self.exact is None:
+            return self.mechanism.constraint_margins(poses)
+        return self.mechanism.exact_axis_margins(poses, self.box[0][self.exact], self.box[1][self.exact])
 
     def __call__(
         self, poses: np.ndarray, oriented: bool = False, keep_extent: bool = False
@@ -413,22 +429,215 @@ def _bisect(
     p_out: np.ndarray,
     start: np.ndarray,
     steps: int,
+    ic_out: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Bisect ``steps`` times between an inside (``p_in``) and an outside (``p_out``) value of
-    column ``column`` (per row) of the poses ``probe`` (N, dof), all rows in one call per step.
+    """The boundary crossing between an inside (``p_in``) and an outside (``p_out``) value of
+    column ``column`` (per row) of the poses ``probe`` (N, dof), and the integrands there.
 
-    The crossing is then placed inside the last bracket: where ``1/kappa``
-    interpolated linearly between the bracket's ends meets the dexterity limit
-    when both ends are reachable (a dexterity boundary: ``1/kappa`` is
-    continuous there, so the crossing moves continuously with the design), else
-    at the bracket's middle (a reachability boundary: to ``h / 2**(steps+1)``).
+    The crossing is where the first of the workspace's margins changes sign: the
+    mechanism's reachability margins (:meth:`~kinematics.base.Mechanism.constraint_margins`:
+    actuator range, joint limits, real IK) and the dexterity margin ``1/kappa^2 - limit^2``
+    (the square: near a singular reach boundary, where a rod or an arm is stretched,
+    ``1/kappa`` falls like the root of the distance and its square linearly). ``start``
+    holds the integrands at the inside end, whose ``1/kappa`` is their ratio, and ``ic_out``
+    the outside end's ``1/kappa`` (NaN where unreachable or unknown).
+
+    1. Each margin linear between the ends: the first sign change ``t1`` (a fraction of the
+       way from ``p_in``), over the margins known at both ends.
+    2. One look at ``t1``: the membership test (its ``1/kappa`` and integrands) and the
+       margins there. Each margin as the parabola through its three values (a line through
+       the two known ones where the outside end's is unknown): the first root in [0, 1].
+       Third order in the edge length for smooth margins, and continuous in the design.
+    3. The integrands at the crossing are those at ``t1`` (``1/kappa`` at the limit where the
+       dexterity margin is the first), or those of the inside end where ``t1`` is
+       unreachable.
+
+    Rows the margins cannot place (the mechanism has none, one is undefined at an end, or
+    none changes sign) are bisected ``steps`` times by the membership test instead
+    (:func:`_bisect_membership`, to ``h / 2**(steps+1)``).
 
     Returns
     -------
     crossing : ndarray (N,)
     value : ndarray (k, N)
-        The integrands (:func:`_integrands`) at the last inside point, ``start`` if none.
+        The integrands (:func:`_integrands`) at the crossing.
     """
+    n = probe.shape[0]
+    limit = values.min_ic
+    value = start.copy()
+    t = np.full(n, np.nan)
+    if n:
+        with np.errstate(invalid="ignore", divide="ignore"):
+            ic_in = start[1] / start[0] if start.shape[0] >= 2 else np.full(n, np.nan)
+        ic_out = np.full(n, np.nan) if ic_out is None else ic_out
+        rows = np.arange(n)
+        ends = np.vstack([probe, probe])
+        ends[rows, column] = p_in
+        ends[rows + n, column] = p_out
+        reach = values.margins(ends)
+        reach = np.empty((2 * n, 0)) if reach is None else reach
+        g_in = np.column_stack([reach[:n], _dexterity_margin(ic_in, limit)])
+        g_out = np.column_stack([reach[n:], _dexterity_margin(ic_out, limit)])
+        linear, refined = (
+            (_linear_crossing_compiled, _refined_crossing_compiled)
+            if kernels.compiled()
+            else (_linear_crossing, _refined_crossing)
+        )
+        first = linear(np.ascontiguousarray(g_in), np.ascontiguousarray(g_out))
+        look = np.nonzero(np.isfinite(first))[0]
+        t1 = first[look]
+        at = probe[look].copy()
+        at[np.arange(look.size), column[look]] = p_in[look] + t1 * (p_out[look] - p_in[look])
+        inside_1, weight_1, ic_1, _ = values(at)
+        reach_1 = values.margins(at) if reach.shape[1] else np.empty((look.size, 0))
+        g_1 = np.column_stack([reach_1, _dexterity_margin(ic_1, limit)])
+        t2, which = refined(np.ascontiguousarray(g_in[look]), g_1, np.ascontiguousarray(g_out[look]), t1)
+        t[look] = t2
+        reachable_1 = np.isfinite(ic_1)
+        if start.shape[0]:
+            dexterous_first = reachable_1 & (which == g_1.shape[1] - 1)
+            ic_there = np.where(dexterous_first, limit, np.nan_to_num(ic_1))
+            at_value = np.array(_integrands(reachable_1, weight_1, ic_there, start.shape[0]))
+            value[:, look[reachable_1]] = at_value[:, reachable_1]
+    crossing = p_in + t * (p_out - p_in)
+    left = np.nonzero(np.isnan(t))[0]
+    if left.size:
+        crossing[left], value[:, left] = _bisect_membership(
+            values, probe[left], column[left], p_in[left], p_out[left], start[:, left], steps
+        )
+    return crossing, value
+
+
+def _dexterity_margin(ic: np.ndarray, limit: float) -> np.ndarray:
+    """``1/kappa^2 - limit^2`` (N,): >= 0 where dexterous (NaN where unreachable; all NaN without
+    a dexterity limit, which then bounds nothing)."""
+    if not limit > 0:
+        return np.full(np.shape(ic), np.nan)
+    return np.asarray(ic) ** 2 - limit**2
+
+
+def _linear_crossing(g_in: np.ndarray, g_out: np.ndarray) -> np.ndarray:
+    """Step 1 of :func:`_bisect`: per row of the margins (N, K) at the inside and the outside
+    end (the last column the dexterity margin, which may be unknown at either end), the first
+    sign change of the margins linear between the ends, as a fraction of the way in [0, 1];
+    NaN where the margins cannot place it (a reachability margin unknown at an end, one
+    negative at the inside end, or none known at both ends and negative at the outside)."""
+    known = ~np.isnan(g_in) & ~np.isnan(g_out)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        usable = (
+            known[:, :-1].all(axis=1)
+            & (np.nan_to_num(g_in, nan=0.0) >= 0).all(axis=1)
+            & (known & (g_out < 0)).any(axis=1)
+        )
+        first = np.where(known & (g_out < 0), g_in / (g_in - g_out), np.inf).min(axis=1)
+    return np.where(usable, np.clip(first, 0.0, 1.0), np.nan)
+
+
+def _refined_crossing(g0: np.ndarray, gm: np.ndarray, g1: np.ndarray, tm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Step 2 of :func:`_bisect`: the first root in [0, 1] of the margins (N, K) through
+    ``(0, g0)``, ``(tm, gm)``, ``(1, g1)`` (``tm`` (N,) in [0, 1]): each margin a parabola
+    through its three values, or the line through the first two where ``g1`` is unknown.
+    Returns the root (``tm`` where no margin has one there) and the column of the first
+    margin (-1 where none)."""
+    t = tm[:, None]
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        c2 = ((gm - g0) - t * (g1 - g0)) / (t * (t - 1.0))
+        c1 = g1 - g0 - c2
+        # roots of g0 + c1 s + c2 s^2 in the stable form 2 g0 / (-c1 -+ sqrt(disc))
+        disc = c1 * c1 - 4.0 * c2 * g0
+        root = np.sqrt(np.where(disc >= 0, disc, np.nan))
+        both = np.stack([2.0 * g0 / (-c1 - root), 2.0 * g0 / (-c1 + root)])
+        quadratic = np.where((both >= 0.0) & (both <= 1.0), both, np.inf).min(axis=0)
+        line = t * g0 / (g0 - gm)
+        line = np.where((gm < g0) & (line >= 0.0) & (line <= 1.0), line, np.inf)
+        roots = np.where(np.isnan(g1) | (t <= 0.0) | (t >= 1.0), line, quadratic)
+    roots = np.where(np.isnan(gm) | np.isnan(g0), np.inf, roots)
+    which = np.argmin(roots, axis=1)
+    first = roots[np.arange(roots.shape[0]), which]
+    found = np.isfinite(first)
+    return np.where(found, first, tm), np.where(found, which, -1)
+
+
+@kernels.vector_jit
+def _linear_crossing_compiled(g_in, g_out):
+    """:func:`_linear_crossing`, one row at a time (the same operations)."""
+    n, k = g_in.shape
+    out = np.empty(n)
+    for r in range(n):
+        first = np.inf
+        usable = True
+        any_negative = False
+        for c in range(k):
+            a, b = g_in[r, c], g_out[r, c]
+            known = not (np.isnan(a) or np.isnan(b))
+            if c < k - 1 and not known:
+                usable = False
+            if not np.isnan(a) and a < 0.0:
+                usable = False
+            if known and b < 0.0:
+                any_negative = True
+                first = min(first, a / (a - b))
+        out[r] = min(max(first, 0.0), 1.0) if usable and any_negative else np.nan
+    return out
+
+
+@kernels.vector_jit
+def _refined_crossing_compiled(g0, gm, g1, tm):
+    """:func:`_refined_crossing`, one row at a time (the same operations)."""
+    n, k = g0.shape
+    first = np.empty(n)
+    which = np.empty(n, dtype=np.int64)
+    for r in range(n):
+        t = tm[r]
+        best = np.inf
+        best_c = -1
+        for c in range(k):
+            a, m, b = g0[r, c], gm[r, c], g1[r, c]
+            if np.isnan(m) or np.isnan(a):
+                continue
+            if np.isnan(b) or t <= 0.0 or t >= 1.0:
+                s = t * a / (a - m)
+                root = s if (m < a and s >= 0.0 and s <= 1.0) else np.inf
+            else:
+                c2 = ((m - a) - t * (b - a)) / (t * (t - 1.0))
+                c1 = b - a - c2
+                disc = c1 * c1 - 4.0 * c2 * a
+                root = np.inf
+                if disc >= 0.0:
+                    sq = math.sqrt(disc)
+                    for s in (2.0 * a / (-c1 - sq), 2.0 * a / (-c1 + sq)):
+                        if s >= 0.0 and s <= 1.0 and s < root:
+                            root = s
+            if root < best:
+                best = root
+                best_c = c
+        if best < np.inf:
+            first[r], which[r] = best, best_c
+        else:
+            first[r], which[r] = t, -1
+    return first, which
+
+
+def _dexterity_fraction(ic_in: np.ndarray, ic_out: np.ndarray, limit: float) -> np.ndarray:
+    """Where ``1/kappa`` meets ``limit`` between a pose where it is ``ic_in`` and one where it is
+    ``ic_out``, as a fraction of the way: ``1/kappa^2`` taken linear. Why the square: near a
+    singular reach boundary (a rod or an arm stretched: H4, Delta) ``1/kappa`` falls like the
+    root of the distance to it and its square linearly; where ``1/kappa`` is smooth both are
+    second order."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return (ic_in**2 - limit**2) / (ic_in**2 - ic_out**2)
+
+
+def _bisect_membership(
+    values: _PointValues,
+    probe: np.ndarray,
+    column: np.ndarray,
+    p_in: np.ndarray,
+    p_out: np.ndarray,
+    start: np.ndarray,
+    steps: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_bisect` by bisection of the membership test (see there)."""
     rows = np.arange(probe.shape[0])
     value = start
     ic_in = np.full(rows.size, np.nan)
@@ -443,7 +652,7 @@ def _bisect(
             value = np.where(inside_mid, np.array(_integrands(inside_mid, weight, ic, value.shape[0])), value)
     limit = values.min_ic
     with np.errstate(invalid="ignore", divide="ignore"):
-        t = (ic_in - limit) / (ic_in - ic_out)
+        t = _dexterity_fraction(ic_in, ic_out, limit)
     dexterity = (limit > 0) & np.isfinite(t) & (ic_out <= limit) & (ic_in > limit)
     t = np.where(dexterity, np.clip(t, 0.0, 1.0), 0.5)
     return p_in + t * (p_out - p_in), value
@@ -457,6 +666,7 @@ def _edge_crossings(
     sampled: list[int],
     box: tuple[np.ndarray, np.ndarray],
     steps: int = BISECTIONS,
+    ic: np.ndarray | None = None,
 ) -> list[tuple[np.ndarray, ...]]:
     """Where the workspace boundary crosses the grid edges, along each sampled axis.
 
@@ -464,10 +674,10 @@ def _edge_crossings(
     axis j are those between neighbouring nodes and the half edges from an
     end node to the box face (the face is evaluated where the end node is
     inside: a workspace that fills the box up to the face has no crossing
-    there). Each edge whose ends differ in membership is bisected ``steps``
-    times (every axis in the same calls); the crossing is the middle of the
-    last bracket. ``f`` are integrands (node arrays, 0 outside) whose values
-    at the crossings are reported: those at the last inside bisection point.
+    there). On each edge whose ends differ in membership the crossing is placed
+    by :func:`_bisect` (every axis in the same calls). ``f`` are integrands (node
+    arrays, 0 outside) whose values at the crossings are reported; ``ic``: the
+    nodes' ``1/kappa`` (NaN where unreachable), for dexterity crossings.
 
     Returns
     -------
@@ -485,12 +695,15 @@ def _edge_crossings(
         shape = list(inside.shape)
         shape[j] = n + 2
         ins, g = np.zeros(shape, dtype=bool), np.zeros((k,) + tuple(shape))
+        icx = np.full(shape, np.nan)
         inner = [slice(None)] * ndim
         inner[j] = slice(1, n + 1)
         ins[tuple(inner)] = inside
+        if ic is not None:
+            icx[tuple(inner)] = ic
         for m in range(k):
             g[m][tuple(inner)] = f[m]
-        ext.append((j, n, pos, ins, g))
+        ext.append((j, n, pos, ins, g, icx))
         for face, node in ((0, 0), (n + 1, n - 1)):
             idx = list(np.nonzero(np.take(inside, [node], axis=j)))
             if idx[0].size:
@@ -505,11 +718,12 @@ def _edge_crossings(
         for e, idx, poses in faces:
             stop = start + poses.shape[0]
             ext[e][3][idx] = inside_f[start:stop]
+            ext[e][5][idx] = ic_f[start:stop]
             for m, fm in enumerate(_integrands(inside_f[start:stop], weight_f[start:stop], ic_f[start:stop], k)):
                 ext[e][4][m][idx] = fm
             start = stop
     brackets = []
-    for j, n, pos, ins, g in ext:
+    for j, n, pos, ins, g, icx in ext:
         lower = [slice(None)] * ndim
         upper = [slice(None)] * ndim
         lower[j], upper[j] = slice(0, n + 1), slice(1, n + 2)
@@ -519,6 +733,8 @@ def _edge_crossings(
         in_left = left[tuple(idx)]
         idx_in = list(idx)
         idx_in[j] = np.where(in_left, edge, edge + 1)
+        idx_out = list(idx)
+        idx_out[j] = np.where(in_left, edge + 1, edge)
         idx_node = list(idx)
         idx_node[j] = np.clip(edge - 1, 0, n - 1)
         brackets.append(
@@ -529,6 +745,7 @@ def _edge_crossings(
                 np.where(in_left, pos[edge + 1], pos[edge]),
                 g[(slice(None),) + tuple(idx_in)],
                 _node_poses(axes, idx_node),
+                icx[tuple(idx_out)],
             )
         )
     sizes = [b[1].size for b in brackets]
@@ -540,6 +757,7 @@ def _edge_crossings(
         np.concatenate([b[3] for b in brackets]),
         np.concatenate([b[4] for b in brackets], axis=1),
         steps,
+        np.concatenate([b[6] for b in brackets]),
     )
     out = []
     start = 0
@@ -632,19 +850,21 @@ def _boundary_corrected_sums(
     f0: np.ndarray,
     f1: np.ndarray,
     steps: int,
+    ic: np.ndarray,
 ) -> tuple[float, float]:
     """``sum_cells fraction * f`` for ``f0`` (weight) and ``f1`` (weight / kappa), node arrays
     in the grid's shape (0 outside): each boundary cell counts its inside fraction times
-    ``f`` at the centroid of its inside part (see :func:`_integrate_grid`)."""
+    ``f`` at the centroid of its inside part (see :func:`_integrate_grid`). ``ic``: the
+    nodes' ``1/kappa`` (NaN where unreachable)."""
     if kernels.compiled():
-        return _boundary_corrected_sums_compiled(values, axes, box, resolution, sampled, inside, f0, f1, steps)
+        return _boundary_corrected_sums_compiled(values, axes, box, resolution, sampled, inside, f0, f1, steps, ic)
     n_sampled = len(sampled)
     nearest = np.empty((n_sampled,) + inside.shape)
     toward = np.empty((n_sampled,) + inside.shape)
     crossing_values = np.empty((n_sampled, 2) + inside.shape)
-    crossings = _edge_crossings(values, axes, inside, (f0, f1), sampled, box, steps)
+    crossings = _edge_crossings(values, axes, inside, (f0, f1), sampled, box, steps, ic)
     for k, (j, (minus, plus, at_minus, at_plus)) in enumerate(zip(sampled, crossings)):
-        step = float(box[1][j] - box[0][j]) / resolution
+        step = float(box[1][j] - box[0][j]) / len(axes[j])
         nearest[k] = np.minimum(minus, plus) / step  # in cell units
         toward[k] = np.where(plus < minus, 1.0, -1.0)
         crossing_values[k] = np.where(plus < minus, at_plus, at_minus)
@@ -882,6 +1102,7 @@ def _boundary_corrected_sums_compiled(
     f0: np.ndarray,
     f1: np.ndarray,
     steps: int,
+    ic: np.ndarray,
 ) -> tuple[float, float]:
     """:func:`_boundary_corrected_sums` with sparse bookkeeping: the grid edges whose ends
     differ in membership are found slab by slab (vectorised comparisons of neighbouring layers),
@@ -897,7 +1118,7 @@ def _boundary_corrected_sums_compiled(
     for k, j in enumerate(sampled):  # the face, the nodes, the face
         positions[k, 0], positions[k, sizes[k] + 1] = float(box[0][j]), float(box[1][j])
         positions[k, 1 : sizes[k] + 1] = axes[j]
-    steps_of = (positions[np.arange(len(sampled)), sizes + 1] - positions[:, 0]) / resolution
+    steps_of = (positions[np.arange(len(sampled)), sizes + 1] - positions[:, 0]) / sizes
     column = np.asarray(sampled, dtype=np.int64)
 
     def poses_of(nodes: np.ndarray, axis: np.ndarray, at: np.ndarray) -> np.ndarray:
@@ -918,21 +1139,26 @@ def _boundary_corrected_sums_compiled(
             faces.append((np.full(outer.size, k), np.full(outer.size, side), flat(k, outer, end, inner)))
     face_axis, face_side, face_node = (np.concatenate(part) for part in zip(*faces))
     axis_parts, left_parts, right_parts = [], [], []
+    flat_ic = ic.ravel()
+    ic_parts = []
     if face_node.size:  # a face outside the workspace: a crossing on the half edge to it
-        face_inside = values(poses_of(face_node, face_axis, positions[face_axis, face_side * (sizes[face_axis] + 1)]))[
-            0
-        ]
+        face_inside, _, face_ic, _ = values(
+            poses_of(face_node, face_axis, positions[face_axis, face_side * (sizes[face_axis] + 1)])
+        )
         out = ~face_inside
         axis_parts.append(face_axis[out])
         left_parts.append(np.where(face_side[out] == 0, -1, face_node[out]))
         right_parts.append(np.where(face_side[out] == 0, face_node[out], -1))
+        ic_parts.append(face_ic[out])
     edge_axis, lower = _cut_edges(flat_inside, strides, sizes)
     axis_parts.append(edge_axis)
     left_parts.append(lower)
     right_parts.append(lower + strides[edge_axis])
+    ic_parts.append(np.where(flat_inside[lower], flat_ic[lower + strides[edge_axis]], flat_ic[lower]))
     axis = np.concatenate(axis_parts).astype(np.int64)
     left = np.concatenate(left_parts).astype(np.int64)
     right = np.concatenate(right_parts).astype(np.int64)
+    ic_out = np.concatenate(ic_parts)
     if not axis.size:
         return float(f0.sum()), float(f1.sum())
     stride_of = strides[axis]
@@ -950,6 +1176,7 @@ def _boundary_corrected_sums_compiled(
         p_out,
         np.vstack([f0[inner_node], f1[inner_node]]),
         steps,
+        ic_out,
     )
     # the nodes next to a crossing: left of it (the crossing above them), right of it (below)
     has_left, has_right = left >= 0, right >= 0
@@ -1146,7 +1373,16 @@ def _integrate_grid(
     f1 = np.where(inside, weight * np.nan_to_num(ic), 0.0)
     if sampled:
         weight_sum, ic_sum = _boundary_corrected_sums(
-            values, axes, box, resolution, sampled, inside.reshape(shape), f0.reshape(shape), f1.reshape(shape), steps
+            values,
+            axes,
+            box,
+            resolution,
+            sampled,
+            inside.reshape(shape),
+            f0.reshape(shape),
+            f1.reshape(shape),
+            steps,
+            ic.reshape(shape),
         )
     else:
         weight_sum, ic_sum = float(f0.sum()), float(f1.sum())
@@ -1158,6 +1394,74 @@ def _integrate_grid(
     )
     samples = tuple(np.concatenate(k) for k in zip(*kept)) if keep_samples else None
     return volume, stats, total, n_inside, samples
+
+
+# --------------------------------------------------------------- sections
+#: nodes of the (y, phi) rule of :func:`_integrate_sections` per ``resolution``: phi, y, and the
+#: sample spacing along the exact axis as a fraction of the box (anisotropic: docs/accuracy.md)
+SECTION_NODES = (1.0, 1.5, 0.375)
+
+
+def _integrate_sections(mechanism, resolution, orientation, min_ic, length):
+    """Exact sections along ``mechanism.section_axis`` (3-RPR: x), a product rule across them.
+
+    The section axis is integrated in closed form per row
+    (:meth:`~kinematics.base.Mechanism.exact_sections`: exact interval ends, ``1/kappa`` by the
+    corrected trapezoid rule on nodes ``step`` apart, the dexterity limit placed by
+    interpolation). The other two axes (3-RPR: y, phi) take the midpoint rule over the pose
+    box, ``SECTION_NODES[1] * resolution`` rows along y per layer and ``resolution`` layers
+    along phi (one at constant orientation); each layer's rows are shifted by the fraction
+    ``{j g}`` of a row (g the golden ratio's conjugate, j the layer), so that a feature at
+    constant y (3-RPR: the annulus of the leg whose platform joint is the pose point does not
+    turn with phi) is not sampled at the same offset in every layer. Continuous in the design:
+    the box, the rows and the sections all move continuously.
+    """
+    section = mechanism.section_axis
+    lo, hi = mechanism.pose_bounds(orientation)
+    others = [j for j in range(mechanism.dof) if j != section]
+    angular = [j for j in others if mechanism.angular[j]]
+    linear = [j for j in others if not mechanism.angular[j]]
+    if len(linear) != 1 or len(angular) > 1:
+        raise ValueError(f"{mechanism.name}: exact sections need one linear transverse axis and at most one angle")
+    ty = linear[0]
+    n_y = max(int(math.ceil(SECTION_NODES[1] * resolution)), 2)
+    hy = (float(hi[ty]) - float(lo[ty])) / n_y
+    if angular and orientation[1] > orientation[0]:
+        n_a = max(int(resolution * SECTION_NODES[0]), 1)
+        ha = (orientation[1] - orientation[0]) / n_a
+        layers = orientation[0] + ha * (np.arange(n_a) + 0.5)
+    else:
+        n_a, ha = 1, 1.0
+        layers = np.array([float(orientation[0])])
+    shift = (np.arange(n_a) * (math.sqrt(5.0) - 1.0) / 2.0) % 1.0 - 0.5
+    rows = (np.arange(n_y) + 0.5)[None, :] + shift[:, None]
+    ys = float(lo[ty]) + hy * (rows % n_y)
+    poses = np.zeros((n_a * n_y, mechanism.dof))
+    poses[:, ty] = ys.ravel()
+    if angular:
+        poses[:, angular[0]] = np.repeat(layers, n_y)
+    step = (float(hi[section]) - float(lo[section])) / max(SECTION_NODES[2] * resolution, 1.0)
+    measure, integral, ic_min, ic_max, evaluated = mechanism.exact_sections(
+        poses, float(lo[section]), step, min_ic, length
+    )
+    cell = hy * ha
+    volume = float(measure.sum()) * cell
+    inside = measure > 0
+    if volume > 0:
+        stats = (float(integral.sum()) * cell / volume, float(ic_min[inside].min()), float(ic_max[inside].max()))
+    else:
+        stats = (0.0, 0.0, 0.0)
+    return volume, stats, int(evaluated), int(inside.sum()), None
+
+
+def _has_sections(mechanism: Mechanism, fixed: dict[str, float]) -> bool:
+    """Whether ``method="grid"`` integrates by exact sections (the mechanism provides them and
+    no pose variable is fixed)."""
+    return (
+        not fixed
+        and mechanism.section_axis is not None
+        and mechanism.exact_sections(np.zeros((0, mechanism.dof)), 0.0, 1.0, 0.0) is not None
+    )
 
 
 # ------------------------------------------------------------------ polar
@@ -1246,7 +1550,7 @@ def evaluate(
     orientation: tuple[float, float] | None = None,
     min_inverse_condition: float = 0.01,
     length: float | None = None,
-    method: str = "midpoint",
+    method: str = "grid",
     fixed: dict[str, float] | None = None,
     return_samples: bool = False,
     error_estimate: bool = True,
@@ -1259,10 +1563,11 @@ def evaluate(
         The design (e.g. ``get_mechanism("h4", d=..., h=..., Qz=...)``).
     resolution : int, optional
         Grid points per sampled axis (larger is finer; doubling it refines
-        every axis). Default :func:`default_resolution`: the node budget
-        :attr:`~kinematics.base.Mechanism.default_nodes` spread over the sampled axes (H4 24, Tricept
-        32, 3-RPR 32 over (x, y, phi) or 181 at constant phi, 2-RPR 400); for ``method="grid"``
-        :attr:`~kinematics.base.Mechanism.grid_nodes` where set (H4 27, Tricept 28, Delta 26).
+        every axis). Default :func:`default_resolution`: for ``method="grid"`` the node budget
+        :attr:`~kinematics.base.Mechanism.grid_nodes` spread over the sampled axes where set
+        (H4 27, Tricept 28, Delta 26), else :attr:`~kinematics.base.Mechanism.default_nodes`
+        (H4 24, Tricept 32, 3-RPR 32 over (x, y, phi) or 181 at constant phi, 2-RPR 400), which
+        ``method="midpoint"`` always takes.
     orientation : (float, float), optional
         Range (rad) of every angular pose variable; ``lo == hi`` asks for the
         constant-orientation workspace (the volume is then the measure over
@@ -1274,11 +1579,12 @@ def evaluate(
     length : float, optional
         Characteristic length homogenising the Jacobian (default: the
         mechanism's).
-    method : {"midpoint", "grid", "polar"}
-        The plain cell-centre count (default; first order), the grid with
-        boundary cells counted by their inside fraction (second order,
-        continuous in the design; 1.5-5x the cost at the defaults), or the Tricept paper's
-        polar boundary search.
+    method : {"grid", "midpoint", "polar"}
+        The grid with boundary cells counted by their inside fraction (the
+        default: second order, continuous in the design; 2-5x the cost of the
+        plain count at the defaults), the plain cell-centre count (first order,
+        the objective of earlier versions), or the Tricept paper's polar
+        boundary search.
     fixed : dict, optional
         Pose variables held at a value (e.g. ``{"z": 0.0}`` for a slice);
         the volume is the measure over the others.
@@ -1321,9 +1627,15 @@ def evaluate(
     if method == "polar" and fixed:
         raise ValueError("fixed pose variables are not supported with method 'polar'")
 
+    # exact sections (3-RPR): method "grid" integrates the section axis in closed form
+    sections = method == "grid" and not return_samples and _has_sections(mechanism, fixed)
     if method == "polar":
         volume, (ic_mean, ic_min, ic_max), n_samples, n_inside, samples = _integrate_polar(
             mechanism, resolution, orientation, min_ic, length, return_samples
+        )
+    elif sections:
+        volume, (ic_mean, ic_min, ic_max), n_samples, n_inside, samples = _integrate_sections(
+            mechanism, resolution, orientation, min_ic, length
         )
     else:
         volume, (ic_mean, ic_min, ic_max), n_samples, n_inside, samples = _integrate_grid(
@@ -1339,6 +1651,10 @@ def evaluate(
         if method == "polar":
             other_volume, (other_mean, _, _), *_ = _integrate_polar(
                 mechanism, max(resolution // 2, 1), orientation, min_ic, length, False
+            )
+        elif sections:
+            other_volume, (other_mean, _, _), *_ = _integrate_sections(
+                mechanism, max(int(round(ERROR_RESOLUTION * resolution)), 2), orientation, min_ic, length
             )
         elif method == "grid":
             other_volume, (other_mean, _, _), *_ = _integrate_grid(

@@ -63,6 +63,15 @@ def test_rpr2_area_to_5e4_at_half_the_default():
     assert abs(ev.volume - m.exact_area()) < abs(old.volume - m.exact_area()) / 3
 
 
+@pytest.mark.parametrize("seed", range(6))
+def test_rpr2_default_within_0p1_percent_of_the_exact_area(seed):
+    """An independent reference: the two annuli's intersection in closed form
+    (``RPR2.exact_area``), on random designs of the design box (thin crescents among them)."""
+    m = random_design("rpr2", seed)
+    ev = evaluate(m, min_inverse_condition=0.0, error_estimate=False)
+    assert ev.volume == pytest.approx(m.exact_area(), rel=TARGET)
+
+
 @pytest.mark.parametrize("degrees", [15, 45])
 def test_rpr3_constant_orientation_area_to_1e3_at_half_the_default(degrees):
     m = get_mechanism("rpr3", **PAPER_DESIGNS["rpr3"])
@@ -93,17 +102,16 @@ def test_multisection_finds_the_outermost_crossing_to_its_resolution():
 
 def test_grid_method_has_its_own_node_budget():
     tricept = get_mechanism("tricept", **PAPER_DESIGNS["tricept"])
-    assert default_resolution(tricept) == 32 and default_resolution(tricept, method="grid") == 28
-    assert evaluate(tricept, method="grid", error_estimate=False).resolution == 28
+    assert default_resolution(tricept, method="midpoint") == 32 and default_resolution(tricept) == 28
+    assert evaluate(tricept, error_estimate=False).method == "grid"  # the default
+    assert evaluate(tricept, error_estimate=False).resolution == 28
     rpr3 = get_mechanism("rpr3", **PAPER_DESIGNS["rpr3"])  # no grid budget: the default one
-    assert default_resolution(rpr3, method="grid") == default_resolution(rpr3) == 32
+    assert default_resolution(rpr3) == default_resolution(rpr3, method="midpoint") == 32
 
 
 # --------------------------------------------------- default vs reference
 #: measured misses of the 0.1 % target (benchmarks/accuracy.py); strict: they fail today
-KNOWN_MISSES = {
-    ("rpr3", "paper"): "3-RPR paper design: GDI 0.19 % at the default (0.1 % at 40)",
-}
+KNOWN_MISSES: dict[tuple[str, str], str] = {}
 
 
 def _cases():
@@ -164,15 +172,7 @@ def has_a_step(eta: np.ndarray) -> bool:
         "tricept",
         "delta",
         "rpr2",
-        pytest.param(
-            "rpr3",
-            marks=pytest.mark.xfail(
-                strict=True,
-                reason="3-RPR: changes of up to 7e-4 of eta between neighbours of a 2e-4 trend: a "
-                "boundary feature thinner than a cell (a 4e-4 step that stays with crossings located to "
-                "h/512) plus the h/32 location of its reachability crossings (docs/accuracy.md)",
-            ),
-        ),
+        "rpr3",
     ],
 )
 def test_eta_along_a_line_has_no_steps(name):
@@ -197,3 +197,12 @@ def test_every_evaluation_carries_its_error_estimate():
     assert abs(ev.volume - ref.volume) <= 3 * ev.volume_error
     with pytest.raises(ValueError, match="w_d must be in"):
         ev.mixed_error(1.5)
+
+
+@pytest.mark.parametrize("degrees", [15, 45])
+def test_rpr3_exact_sections_integrate_to_the_exact_area(degrees):
+    """Exact x-sections (the 3-RPR path of method "grid") at constant orientation, no dexterity limit."""
+    m = random_design("rpr3", seed=1)
+    phi = math.radians(degrees)
+    ev = evaluate(m, orientation=(phi, phi), min_inverse_condition=0.0, error_estimate=False, method="grid")
+    assert ev.volume == pytest.approx(m.exact_area(phi), rel=5e-4)

@@ -36,8 +36,11 @@ def test_evaluate_one_design_prints_a_table_and_writes_parquet(tmp_path, capsys)
     printed = capsys.readouterr().out
     assert code == 0, printed
     row = pd.read_parquet(out).iloc[0]
-    # the same numbers as the evaluator called directly on that design and grid
-    ev = evaluate(get_mechanism("tricept", a=250.0, b=400.0, d=100.0), resolution=16, error_estimate=False)
+    # the same numbers as the evaluator called directly on that design, grid and (default) method
+    assert row["method"] == "grid" and row["resolution"] == 16
+    ev = evaluate(
+        get_mechanism("tricept", a=250.0, b=400.0, d=100.0), resolution=16, method="grid", error_estimate=False
+    )
     assert row["volume"] == pytest.approx(ev.volume, rel=1e-12)
     assert row["gdi"] == pytest.approx(ev.gdi, rel=1e-12)
     assert row["eta"] == pytest.approx(0.3 * row["gdi"] + 0.7 * row["suri"])

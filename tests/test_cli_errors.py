@@ -65,6 +65,11 @@ def test_an_unusable_report_path_is_refused_before_the_report(tmp_path, capsys):
         (["sample.n=nan", "+debug=fast"], ["sample.n=nan is invalid: allowed an integer in [1, 1000000]"], "merging"),
         (["evaluate.allow_coarse=maybe"], ["evaluate.allow_coarse=maybe is invalid: allowed true or false"], "merging"),
         (["objective.wd=0.5"], ["did you mean objective.w_d?"], "To append"),
+        (
+            ["evaluate.method=foo"],
+            ["error: evaluate.method='foo' is invalid: allowed one of grid, midpoint"],
+            "merging",
+        ),
     ],
 )
 def test_a_run_s_bad_override_names_its_field(argv, says, never, capsys):
@@ -86,6 +91,7 @@ def test_a_run_s_bad_override_names_its_field(argv, says, never, capsys):
         (["mechanism=rpr2", "b=x", "q_min=6"], ["b='x' is invalid: allowed a number in [1, 10] mm"]),
         ([*RPR2, "sample.n=nan"], ["error: sample.n=nan is invalid: allowed an integer"]),
         ([*RPR2, "mechanism.fixed.stroke=50"], ["mechanism.fixed.stroke is not a parameter of rpr2"]),
+        ([*RPR2, "evaluate.method=foo"], ["error: evaluate.method='foo' is invalid: allowed one of grid, midpoint"]),
     ],
 )
 def test_evaluate_s_errors_are_the_plain_one_liner_of_their_field(argv, says, capsys):
@@ -115,6 +121,24 @@ def test_a_module_in_the_working_folder_is_explained_for_the_console_script(tmp_
     assert evaluate_command(["mechanism=path", "mechanism.name=my_cli_mech:MyBar", "design=[5,6]"]) == 2
     err = _one_line(capsys)
     assert "mechanism.name='my_cli_mech:MyBar'" in err and "python -m pipeline" in err and "pip install" in err
+
+
+@pytest.mark.parametrize("method", ["grid", "midpoint"])
+def test_evaluate_records_its_integration_method(method, tmp_path, capsys):
+    """``pm-design evaluate`` takes ``evaluate.method`` (default grid) and records it beside the resolution."""
+    from kinematics import MECHANISMS
+    from kinematics.workspace import default_resolution, evaluate
+
+    out = tmp_path / "design.parquet"
+    given = [] if method == "grid" else [f"evaluate.method={method}"]
+    assert evaluate_command([*RPR2, *given, "--parquet", str(out)]) == 0
+    assert any(line.split() == ["method", method] for line in capsys.readouterr().out.splitlines())
+    row = pd.read_parquet(out).iloc[0]
+    rpr2 = MECHANISMS["rpr2"]
+    mech = rpr2.from_design([5.0, 6.0], **rpr2.default_fixed)
+    assert row["method"] == method and row["resolution"] == default_resolution(mech, None, None, method)
+    ev = evaluate(mech, resolution=int(row["resolution"]), method=method, error_estimate=False)
+    assert (row["volume"], row["gdi"]) == (ev.volume, ev.gdi)
 
 
 def test_evaluate_s_parquet_has_the_dataset_s_integer_columns(tmp_path, capsys):

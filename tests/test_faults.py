@@ -94,6 +94,8 @@ SINGLE_RUN_REFUSALS = [
     ("resolution over the time budget", ["evaluate.resolution=39", "evaluate.max_hours=0.01"], "evaluate.resolution"),
     ("rpr2 resolution below its minimum", ["mechanism=rpr2", "evaluate.resolution=20"], "evaluate.resolution"),
     ("refine factor 0", ["evaluate.refine_factor=0"], "evaluate.refine_factor"),
+    ("unknown integration method", ["evaluate.method=foo"], "evaluate.method"),
+    ("polar is no method of a run", ["evaluate.method=polar"], "evaluate.method"),
     ("max hours 0", ["evaluate.max_hours=0"], "evaluate.max_hours"),
     ("n_jobs 0", ["parallel.n_jobs=0"], "parallel.n_jobs"),
     ("unknown backend", ["parallel.backend=mpi"], "parallel.backend"),
@@ -344,10 +346,12 @@ def test_a_job_failing_at_run_time_does_not_lose_the_sweep(monkeypatch, tmp_path
 
     real = run_module.optimise_design
 
-    def flaky(mechanism, resolution, refine_factor, objective, optimizer, initial=None, reference=None, n_jobs=1):
+    def flaky(
+        mechanism, resolution, method, refine_factor, objective, optimizer, initial=None, reference=None, n_jobs=1
+    ):
         if objective.w_d == 0.5:
             raise MemoryError("simulated out of memory")
-        return real(mechanism, resolution, refine_factor, objective, optimizer, initial, reference, n_jobs)
+        return real(mechanism, resolution, method, refine_factor, objective, optimizer, initial, reference, n_jobs)
 
     monkeypatch.setattr(run_module, "optimise_design", flaky)
     out = tmp_path / "out"

@@ -140,21 +140,65 @@ def test_cache_hits_checked_with_joblibs_api(tmp_path):
     assert not cached(sample_designs, cache).check_call_in_cache(*designs_args)
     run_study(make_cfg(overrides), tmp_path / "a")
     designs = cached(sample_designs, cache)(*designs_args)
-    optimise_args = (c.mechanism, c.evaluate.resolution, c.evaluate.refine_factor, c.objective, c.optimizer, None)
+    grid = (c.evaluate.resolution, c.evaluate.method)
+    optimise_args = (c.mechanism, *grid, c.evaluate.refine_factor, c.objective, c.optimizer, None)
     assert cached(sample_designs, cache).check_call_in_cache(*designs_args)
-    assert cached(evaluate_designs, cache).check_call_in_cache(c.mechanism, c.evaluate.resolution, designs)
+    assert cached(evaluate_designs, cache).check_call_in_cache(c.mechanism, *grid, designs)
     assert cached(optimise_design, cache).check_call_in_cache(*optimise_args)
     # a new w_d reruns only the optimiser; n_jobs is not part of any key
     other = validate(make_cfg([*overrides, "objective.w_d=0.75", "parallel.n_jobs=2"]))
     assert not cached(optimise_design, cache).check_call_in_cache(
-        other.mechanism, other.evaluate.resolution, other.evaluate.refine_factor, other.objective, other.optimizer, None
+        other.mechanism, *grid, other.evaluate.refine_factor, other.objective, other.optimizer, None
     )
-    assert cached(evaluate_designs, cache).check_call_in_cache(
-        other.mechanism, other.evaluate.resolution, designs, n_jobs=2
-    )
+    assert cached(evaluate_designs, cache).check_call_in_cache(other.mechanism, *grid, designs, n_jobs=2)
     run_study(make_cfg(overrides), tmp_path / "b")
     for table in ("best", "history", "designs"):
         assert (tmp_path / "a" / f"{table}.parquet").read_bytes() == (tmp_path / "b" / f"{table}.parquet").read_bytes()
+
+
+@pytest.mark.parametrize("method", ["grid", "midpoint"])
+def test_the_integration_method_is_the_runs_and_recorded(method, tmp_path):
+    """``evaluate.method`` reaches every evaluation of the run and is recorded beside the resolution."""
+    from kinematics.workspace import evaluate
+    from pipeline.evaluation import DesignEvaluator
+    from pipeline.objectives import EVALUATION_FIELDS
+
+    overrides = ["+experiment=h4_mixed", *tiny(tmp_path, f"evaluate.method={method}")]
+    c = validate(make_cfg(overrides))
+    assert c.evaluate.method == method
+    paths = run_study(make_cfg(overrides), tmp_path / "run")
+    best = pd.read_parquet(paths["best"]).iloc[0]
+    assert best["method"] == method and best["resolution"] == 4
+    assert read_metadata(paths["best"])["config"]["evaluate"]["method"] == method
+    manifest = json.loads((tmp_path / "run" / "manifest.json").read_text())
+    assert manifest["status"] == "complete" and manifest["config"]["evaluate"]["method"] == method
+    # the sampled designs' numbers are the evaluator's with that method, the optimum's too
+    designs = pd.read_parquet(paths["designs"])
+    rows = DesignEvaluator(c.mechanism, 4, 1, method).evaluate(designs[c.mechanism.design.names].to_numpy())
+    assert designs["volume"].tolist() == rows[:, EVALUATION_FIELDS.index("volume")].tolist()
+    x = best[c.mechanism.design.names].to_numpy(float)
+    options = c.mechanism.evaluation_options()
+    ev = evaluate(c.mechanism.build(x), resolution=4, method=method, error_estimate=False, **options)
+    refined = evaluate(c.mechanism.build(x), resolution=8, method=method, error_estimate=False, **options)
+    assert (best["volume"], best["gdi"]) == (ev.volume, ev.gdi)
+    assert (best["volume_refined"], best["gdi_refined"]) == (refined.volume, refined.gdi)
+
+
+def test_a_midpoint_result_is_never_reused_for_a_grid_run(tmp_path):
+    grid = ["+experiment=h4_mixed", *tiny(tmp_path, "optimizer.reference=true")]  # the default method: grid
+    midpoint = [*grid, "evaluate.method=midpoint"]
+    assert validate(make_cfg(grid)).evaluate.method == "grid"
+    run_study(make_cfg(midpoint), tmp_path / "midpoint")
+    run_study(make_cfg(grid), tmp_path / "grid")
+    stages = json.loads((tmp_path / "grid" / "manifest.json").read_text())["stages"]
+    assert stages == {"sample": "cached", "evaluate": "computed", "reference": "computed", "optimise": "computed"}
+    by_method = {m: pd.read_parquet(tmp_path / m / "best.parquet").iloc[0] for m in ("grid", "midpoint")}
+    assert {m: row["method"] for m, row in by_method.items()} == {"grid": "grid", "midpoint": "midpoint"}
+    assert by_method["grid"]["config_hash"] != by_method["midpoint"]["config_hash"]
+    # the same method again: every stage from the cache
+    run_study(make_cfg(midpoint), tmp_path / "midpoint_again")
+    again = json.loads((tmp_path / "midpoint_again" / "manifest.json").read_text())["stages"]
+    assert set(again.values()) == {"cached"}
 
 
 def test_cache_key_covers_every_source_file():
@@ -203,6 +247,7 @@ def test_dask_backend_on_a_local_cluster(tmp_path):
         ("mechanism.design.lower=[0.2,0.01,0.35]", "mechanism.design bounds of d_ratio"),
         ("mechanism.name=stewart", "mechanism.name"),
         ("evaluate.resolution=0", "evaluate.resolution"),
+        ("evaluate.method=foo", "evaluate.method"),
         ("parallel.n_jobs=0", "parallel.n_jobs"),
         ("objective.name=speed", "objective.name"),
         ("optimizer.name=pso", "optimizer.name"),

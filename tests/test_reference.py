@@ -118,13 +118,13 @@ def test_best_row_error_bars_and_evaluations_apart_from_the_reference():
         "value_refined": 0.301,
     }
     ga = GAConfig(population=4, generations=2, reference=True)
-    out = optimise_design(mech, 6, 2, ObjectiveConfig("mixed", 0.5), ga, reference=reference)
+    out = optimise_design(mech, 6, "grid", 2, ObjectiveConfig("mixed", 0.5), ga, reference=reference)
     best = out["best"]
     assert best["objective_error"] == pytest.approx(abs(best["objective_value_refined"] - best["objective_value"]))
     assert best["reference_evaluations"] == 12345
     assert best["n_evaluations"] == out["history"]["n_evaluations"].sum() < 12345
     assert best["reference_gap_label"] and best["reference_found_by"] == "given"
     off = optimise_design(
-        mech, 6, 2, ObjectiveConfig("mixed", 0.5), GAConfig(population=4, generations=2, reference=False)
+        mech, 6, "grid", 2, ObjectiveConfig("mixed", 0.5), GAConfig(population=4, generations=2, reference=False)
     )
     assert off["best"]["reference_evaluations"] == 0 and off["best"]["reference_gap_label"] == ""

@@ -104,7 +104,8 @@ def evaluate_command(argv: list[str]) -> int:
 
     Design variables by name (``a=250``) or all at once (``design=[250,400,100]``),
     in the mechanism's design units; every other ``key=value`` is a config override
-    (``mechanism.fixed.stroke=120``, ``evaluate.resolution=24``, ``objective.w_d=0.3``);
+    (``mechanism.fixed.stroke=120``, ``evaluate.resolution=24``, ``evaluate.method=midpoint``,
+    ``objective.w_d=0.3``);
     a class of one's own with ``mechanism=path mechanism.name=package.module:Class``.
     Prints one table; ``--parquet FILE`` also writes it with units (its folder is checked
     before the evaluation). Exit 2 on bad input, 1 if the file cannot be written after all.

@@ -25,6 +25,9 @@ from pipeline.objectives import OBJECTIVES
 from pipeline.optimizers.base import MAX_SEED
 
 BACKENDS = ("loky", "threading", "multiprocessing", "dask")
+#: workspace integration methods of :func:`kinematics.workspace.evaluate` a run may use
+#: (``evaluate.method``; its ``polar`` fits the Tricept alone and is for the reproduction)
+EVALUATE_METHODS = ("grid", "midpoint")
 #: kinds of run: real studies, quick looks and tests (``+debug=fast``), speed measurements
 PURPOSES = ("study", "debug", "benchmark")
 _PLAIN_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,99}$")
@@ -62,16 +65,24 @@ class SampleConfig:
 
 @dataclass
 class EvaluateConfig:
-    """Workspace integration: grid resolution and the budgets that bound it.
+    """Workspace integration: method, grid resolution and the budgets that bound it.
 
+    ``method`` (:data:`EVALUATE_METHODS`): ``grid`` counts each cell that the
+    workspace boundary cuts with the fraction of it inside (second order and
+    continuous in the design, docs/accuracy.md); ``midpoint`` is the old
+    cell-centre count (first order, it moves in steps as the boundary crosses
+    a node), kept for comparison. Each method has its own default resolution
+    (``grid``: the mechanism's ``grid_nodes`` budget where set).
     ``resolution``: grid points per sampled axis (null: the mechanism's
-    default). Below the mechanism's ``min_resolution`` the volume or GDI error
+    default for the method). Below the mechanism's ``min_resolution`` the volume or GDI error
     exceeds about 3 %, so it is refused unless ``allow_coarse`` (tests, quick
     looks). ``max_nodes``: nodes of one evaluation, refined one included
     (memory and time); ``max_hours``: estimated wall time of the run.
     """
 
-    #: grid points per sampled axis (null: the mechanism's default)
+    #: workspace integration: grid (boundary fractions, second order) or midpoint (cell-centre count, first order)
+    method: str = "grid"
+    #: grid points per sampled axis (null: the mechanism's default for the method)
     resolution: Optional[int] = None
     #: the optimum is re-evaluated at refine_factor × resolution, [1, 8]
     refine_factor: int = 4
@@ -83,6 +94,7 @@ class EvaluateConfig:
     max_hours: float = 12.0
 
     def __post_init__(self) -> None:
+        check("evaluate.method", self.method, self.method in EVALUATE_METHODS, "one of " + ", ".join(EVALUATE_METHODS))
         check(
             "evaluate.resolution",
             self.resolution,

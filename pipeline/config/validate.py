@@ -21,8 +21,12 @@ from pipeline.config.suggest import did_you_mean
 from pipeline.errors import ConfigError, check, check_writable
 from pipeline.optimizers import OPTIMIZERS
 
-#: conservative grid throughput (nodes/s per worker) for the run-time estimate
+#: conservative grid throughput (nodes/s per worker) for the run-time estimate (midpoint count)
 NODES_PER_SECOND = 1.0e6
+#: cost of a grid node relative to the midpoint count's, per ``evaluate.method``: the grid method's
+#: boundary cells (coarse pass, bisections, cut-cell fractions) cost 1.9x (2-RPR) to 4.7x (Delta)
+#: per node at the mechanisms' default resolutions (docs/accuracy.md, "Measured")
+METHOD_COST = {"midpoint": 1.0, "grid": 5.0}
 
 
 def _refuse_unknown_keys(node: DictConfig, schema: type, prefix: str) -> None:
@@ -77,7 +81,8 @@ def validate(cfg: DictConfig | Config) -> Config:
 
 
 def _check_budget(c: Config) -> None:
-    """Grid resolution between the mechanism's minimum and the node and time budgets."""
+    """Grid resolution between the mechanism's minimum and the node and time budgets (the
+    default resolution and the cost per node are the integration method's)."""
     from kinematics.workspace import default_resolution, sampled_axes
 
     mech = c.mechanism.build(c.mechanism.centre)
@@ -90,7 +95,8 @@ def _check_budget(c: Config) -> None:
             f"{c.mechanism.name} (coarser grids err by more than ~3 % in V or GDI; "
             f"evaluate.allow_coarse=true to accept that)"
         )
-    res = res or default_resolution(mech, orientation)
+    method = c.evaluate.method
+    res = res or default_resolution(mech, orientation, None, method)
     refined_nodes = float(res * c.evaluate.refine_factor) ** n_axes
     if refined_nodes > c.evaluate.max_nodes:
         top = int(c.evaluate.max_nodes ** (1 / n_axes) / c.evaluate.refine_factor)
@@ -100,12 +106,13 @@ def _check_budget(c: Config) -> None:
             f"{refined_nodes:.3g} nodes > evaluate.max_nodes={c.evaluate.max_nodes})"
         )
     evaluations = c.sample.n + OPTIMIZERS[c.optimizer.name](c.optimizer).expected_evaluations()
-    hours = evaluations * float(res) ** n_axes / (NODES_PER_SECOND * c.parallel.n_jobs) / 3600
+    throughput = NODES_PER_SECOND / METHOD_COST[method]
+    hours = evaluations * float(res) ** n_axes / (throughput * c.parallel.n_jobs) / 3600
     if hours > c.evaluate.max_hours:
         raise ConfigError(
             f"evaluate.resolution={res} is invalid: the run is estimated at {hours:.3g} h "
             f"> evaluate.max_hours={c.evaluate.max_hours} ({evaluations} evaluations of "
-            f"{float(res) ** n_axes:.3g} nodes at {NODES_PER_SECOND:.0e} nodes/s/worker)"
+            f"{float(res) ** n_axes:.3g} nodes at {throughput:.0e} nodes/s/worker, method {method})"
         )
 
 

@@ -1,7 +1,8 @@
 """The parallel batch evaluation of designs.
 
 :class:`DesignEvaluator` is a picklable description (mechanism config, grid
-options) whose :meth:`DesignEvaluator.evaluate` evaluates a population
+options: resolution and integration method) whose
+:meth:`DesignEvaluator.evaluate` evaluates a population
 ``(P, n_design)`` in ``n_jobs`` chunks on the backend that
 ``joblib.parallel_config`` selects: loky by default (this process and
 ``n_jobs - 1`` loky workers, :mod:`pipeline.evaluation.pool`), dask inside
@@ -40,15 +41,21 @@ class MechanismSpec:
     options: tuple[tuple[str, object], ...]
 
     @classmethod
-    def of(cls, mechanism) -> MechanismSpec:
-        """The spec of a ``MechanismConfig`` (``pipeline.config``) or of a spec."""
-        if isinstance(mechanism, cls):
-            return mechanism
-        return cls(
-            mechanism.name,
-            tuple(sorted(mechanism.fixed.items())),
-            tuple(sorted(mechanism.evaluation_options().items())),
+    def of(cls, mechanism, method: str | None = None) -> MechanismSpec:
+        """The spec of a ``MechanismConfig`` (``pipeline.config``) or of a spec; ``method``
+        (``evaluate.method``) joins its evaluation options (None: leave them as they are)."""
+        spec = (
+            mechanism
+            if isinstance(mechanism, cls)
+            else cls(
+                mechanism.name,
+                tuple(sorted(mechanism.fixed.items())),
+                tuple(sorted(mechanism.evaluation_options().items())),
+            )
         )
+        if method is None:
+            return spec
+        return cls(spec.name, spec.fixed, tuple(sorted({**dict(spec.options), "method": str(method)}.items())))
 
     def build(self, design: np.ndarray):
         """The mechanism of one design vector (design units); ValueError if infeasible."""
@@ -65,24 +72,29 @@ class DesignEvaluator:
         Registry name, fixed parameters, evaluation limits (``pipeline.config``);
         workers receive its :class:`MechanismSpec`.
     resolution : int or None
-        Grid points per sampled axis (None: the mechanism's default per design).
+        Grid points per sampled axis (None: the mechanism's default per design and method).
     n_jobs : int
         Parallel chunks per batch (1 = in-process; loky: this process evaluates
         one chunk, ``n_jobs - 1`` worker processes the others), capped by the
         usable cores and the batch size (:func:`pipeline.evaluation.scale.workers_for`);
         on dask a batch is sent again after a lost worker while workers remain.
+    method : str or None
+        Workspace integration method of :func:`kinematics.workspace.evaluate`
+        (``evaluate.method``: "grid" or "midpoint"); None: that function's default.
+        The pipeline's stages always pass the config's.
     """
 
     mechanism: object
     resolution: int | None = None
     n_jobs: int = 1
+    method: str | None = None
 
     def evaluate(self, designs: np.ndarray) -> np.ndarray:
         """Designs (P, n_design) -> evaluation rows (P, len(EVALUATION_FIELDS)), in input order."""
         designs = np.atleast_2d(np.asarray(designs, dtype=float))
         if designs.shape[0] == 0:
             return np.empty((0, len(EVALUATION_FIELDS)))
-        spec = MechanismSpec.of(self.mechanism)
+        spec = MechanismSpec.of(self.mechanism, self.method)
         backend, _ = get_active_backend()
         loky = isinstance(backend, BACKENDS["loky"])
         n_chunks = workers_for(self.n_jobs, designs.shape[0])  # capped by the usable cores (logged) and the batch
@@ -116,8 +128,8 @@ class DesignEvaluator:
 CHUNK_TIMEOUT = 300.0
 SECONDS_PER_DESIGN = 10.0
 
-#: mechanisms whose compiled kernels this process has already built or loaded
-_COMPILED: set[str] = set()
+#: (mechanism, integration method) whose compiled kernels this process has already built or loaded
+_COMPILED: set[tuple[str, object]] = set()
 
 
 def _compile_kernels(spec: MechanismSpec, designs: np.ndarray) -> None:
@@ -126,10 +138,12 @@ def _compile_kernels(spec: MechanismSpec, designs: np.ndarray) -> None:
     Why: numba compiles on first call and caches on disk; without this, every
     worker of the first batch on a new machine compiles the same kernels at
     the same time (~3 s each). After it, workers load them from the disk cache.
-    A tiny grid (2 nodes per axis) of the first design that builds is enough.
+    A tiny grid (2 nodes per axis, with the run's integration method) of the
+    first design that builds is enough.
     A Ctrl-C during the compilation takes effect once it is done (:func:`pipeline.evaluation.pool.sigint_deferred`).
     """
-    if spec.name in _COMPILED:
+    key = (spec.name, dict(spec.options).get("method"))
+    if key in _COMPILED:
         return
     for design in designs:
         try:
@@ -138,7 +152,7 @@ def _compile_kernels(spec: MechanismSpec, designs: np.ndarray) -> None:
             continue
         with sigint_deferred():
             evaluate(mech, **dict(spec.options, resolution=2, error_estimate=False))
-        _COMPILED.add(spec.name)
+        _COMPILED.add(key)
         return
 
 

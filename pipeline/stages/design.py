@@ -23,7 +23,8 @@ from pipeline.store.parquet import param_column
 def evaluate_design(c: Config, design: list[float]) -> pd.DataFrame:
     """One row: the design variables (design units), the mechanism's parameters
     (``param_<name>_<unit>``), V (``volume_unit``), GDI, SURI, 1/κ range, η at the
-    config's ``objective.w_d``, and the grid resolution used.
+    config's ``objective.w_d``, and the grid resolution and integration method used
+    (``evaluate.resolution``, ``evaluate.method``).
 
     Raises
     ------
@@ -40,8 +41,9 @@ def evaluate_design(c: Config, design: list[float]) -> pd.DataFrame:
         mech = m.build(x)
     except ValueError as exc:
         raise ConfigError(f"design={list(design)} is invalid: {exc}") from None
-    resolution = c.evaluate.resolution or default_resolution(mech, m.orientation_rad())
-    rows = DesignEvaluator(m, resolution, 1).evaluate(x[None, :])
+    method = c.evaluate.method
+    resolution = c.evaluate.resolution or default_resolution(mech, m.orientation_rad(), None, method)
+    rows = DesignEvaluator(m, resolution, 1, method).evaluate(x[None, :])
     frame = evaluation_frame(rows).drop(columns=["valid"])
     row: dict = {"mechanism": m.name, **dict(zip(names, x.tolist()))}
     row.update(
@@ -56,4 +58,5 @@ def evaluate_design(c: Config, design: list[float]) -> pd.DataFrame:
     row["w_d"] = float(c.objective.w_d)
     row["eta"] = float(objective_values("mixed", rows, c.objective.w_d)[0])
     row["resolution"] = int(resolution)
+    row["method"] = method
     return pd.DataFrame([row])

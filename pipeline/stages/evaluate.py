@@ -29,9 +29,12 @@ def evaluation_frame(rows) -> pd.DataFrame:
 
 
 def evaluate_designs(
-    mechanism: MechanismConfig, resolution: int | None, designs: pd.DataFrame, n_jobs: int = 1
+    mechanism: MechanismConfig, resolution: int | None, method: str, designs: pd.DataFrame, n_jobs: int = 1
 ) -> pd.DataFrame:
     """The sampled designs with one column per evaluation field.
+
+    ``resolution`` and ``method`` are the config's ``evaluate.resolution`` and
+    ``evaluate.method`` (both part of the stage's cache key).
 
     Returns
     -------
@@ -39,7 +42,7 @@ def evaluate_designs(
         ``design_id``, the design variables, then :data:`~pipeline.objectives.EVALUATION_FIELDS`
         (volume in the mechanism's volume unit, gdi, suri, ...; ``valid`` bool).
     """
-    log.debug("evaluate: %d designs of %s with %d workers", len(designs), mechanism.name, n_jobs)
-    evaluator = DesignEvaluator(mechanism, resolution, n_jobs)
+    log.debug("evaluate: %d designs of %s (%s) with %d workers", len(designs), mechanism.name, method, n_jobs)
+    evaluator = DesignEvaluator(mechanism, resolution, n_jobs, method)
     rows = evaluator.evaluate(designs[mechanism.design.names].to_numpy())
     return pd.concat([designs.reset_index(drop=True), evaluation_frame(rows)], axis=1)

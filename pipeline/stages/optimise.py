@@ -69,6 +69,7 @@ class _MemoEvaluator:
 def optimise_design(
     mechanism: MechanismConfig,
     resolution: int | None,
+    method: str,
     refine_factor: int,
     objective: ObjectiveConfig,
     optimizer: OptimizerConfig,
@@ -83,7 +84,10 @@ def optimise_design(
     mechanism, objective, optimizer
         Typed config sections.
     resolution : int or None
-        Grid resolution of the fitness (None: the mechanism's default).
+        Grid resolution of the fitness (None: the mechanism's default for the method).
+    method : str
+        Workspace integration method (``evaluate.method``: grid or midpoint), of the
+        fitness and of the refined evaluation alike.
     refine_factor : int
         The optimum is re-evaluated at this multiple of the resolution.
     initial : ndarray (k, n_design), optional
@@ -101,7 +105,7 @@ def optimise_design(
     """
     names = list(mechanism.design.names)
     lower, upper = np.asarray(mechanism.design.lower), np.asarray(mechanism.design.upper)
-    rows = _MemoEvaluator(DesignEvaluator(mechanism, resolution, n_jobs))
+    rows = _MemoEvaluator(DesignEvaluator(mechanism, resolution, n_jobs, method))
     scalar = Problem(lambda x: objective_values(objective.name, rows(x), objective.w_d), lower, upper)
     algorithm = OPTIMIZERS[optimizer.name](optimizer)
     log.info(
@@ -142,14 +146,14 @@ def optimise_design(
         if polished.fun > value:
             x, value, found_by = polished.x, polished.fun, "polish"
     if optimizer.reference and reference is None:
-        reference = reference_stage(mechanism, resolution, refine_factor, objective, n_jobs)
+        reference = reference_stage(mechanism, resolution, method, refine_factor, objective, n_jobs)
     if not optimizer.reference:
         reference = None
     history = result.history.rename(columns={f"x{j}": n for j, n in enumerate(names)})
     wall_time = history.pop("wall_time").tolist()
     # a multi-objective run evaluates outside the scalar problem: count those too
     multi_objective_evaluations = result.n_evaluations if algorithm.n_objectives > 1 else 0
-    best = _best_row(mechanism, resolution, refine_factor, objective, x, value, rows)
+    best = _best_row(mechanism, resolution, method, refine_factor, objective, x, value, rows)
     best.update(
         optimizer_value=optimizer_value,
         found_by=found_by,
@@ -171,13 +175,18 @@ def optimise_design(
 
 
 def reference_stage(
-    mechanism: MechanismConfig, resolution: int | None, refine_factor: int, objective: ObjectiveConfig, n_jobs: int = 1
+    mechanism: MechanismConfig,
+    resolution: int | None,
+    method: str,
+    refine_factor: int,
+    objective: ObjectiveConfig,
+    n_jobs: int = 1,
 ) -> dict:
-    """The reference optimum of one problem (mechanism, resolution, objective), once.
+    """The reference optimum of one problem (mechanism, resolution, method, objective), once.
 
     :func:`~pipeline.optimizers.reference.best_known` (several CMA-ES seeds, DE,
     a dense grid where the dimension allows, each polished) on the run's
-    objective at the run's resolution; its optimum is re-evaluated at
+    objective at the run's resolution and integration method; its optimum is re-evaluated at
     ``refine_factor`` times the resolution for the error estimate.
 
     Returns
@@ -188,14 +197,14 @@ def reference_stage(
         ``value_refined`` (objective at the refined resolution), ``error``
         (``|value_refined - value|``, objective unit).
     """
-    rows = _MemoEvaluator(DesignEvaluator(mechanism, resolution, n_jobs))
+    rows = _MemoEvaluator(DesignEvaluator(mechanism, resolution, n_jobs, method))
     problem = Problem(
         lambda x: objective_values(objective.name, rows(x), objective.w_d),
         np.asarray(mechanism.design.lower),
         np.asarray(mechanism.design.upper),
     )
     found = best_known(problem)
-    refined = _refined_value(mechanism, resolution, refine_factor, objective, found.x)
+    refined = _refined_value(mechanism, resolution, method, refine_factor, objective, found.x)
     log.info("reference: %.6g by %s, %d evaluations", found.fun, found.summary(), found.n_evaluations)
     return {
         "value": float(found.fun),
@@ -248,24 +257,31 @@ def reference_columns(best: dict, reference: dict | None, names: list[str]) -> d
 
 
 def _refined_value(
-    mechanism: MechanismConfig, resolution: int | None, refine_factor: int, objective: ObjectiveConfig, x: np.ndarray
+    mechanism: MechanismConfig,
+    resolution: int | None,
+    method: str,
+    refine_factor: int,
+    objective: ObjectiveConfig,
+    x: np.ndarray,
 ) -> float:
-    """Objective of design ``x`` at ``refine_factor`` times the resolution (one evaluation)."""
-    res = resolution or default_resolution(mechanism.build(x), mechanism.orientation_rad())
-    refined_rows = DesignEvaluator(mechanism, res * refine_factor, 1).evaluate(np.asarray(x)[None, :])
+    """Objective of design ``x`` at ``refine_factor`` times the resolution (one evaluation, same method)."""
+    res = resolution or default_resolution(mechanism.build(x), mechanism.orientation_rad(), None, method)
+    refined_rows = DesignEvaluator(mechanism, res * refine_factor, 1, method).evaluate(np.asarray(x)[None, :])
     return float(objective_values(objective.name, refined_rows, objective.w_d)[0])
 
 
 def _best_row(
     mechanism: MechanismConfig,
     resolution: int | None,
+    method: str,
     refine_factor: int,
     objective: ObjectiveConfig,
     x: np.ndarray,
     value: float,
     rows: _MemoEvaluator,
 ) -> dict:
-    """Design, mechanism parameters, evaluation at the run's and at the refined resolution."""
+    """Design, mechanism parameters, evaluation at the run's and at the refined resolution
+    (both with the run's integration ``method``, recorded beside the resolution)."""
     names = list(mechanism.design.names)
     best: dict = {name: float(v) for name, v in zip(names, x)}
     lower, upper = mechanism.design.lower, mechanism.design.upper
@@ -278,8 +294,8 @@ def _best_row(
         if isinstance(v, (int, float, str)) and not isinstance(v, bool) and key not in names:
             best[param_column(key, mech.param_unit(key, v))] = v
     base = evaluation_frame(rows(x[None, :])).iloc[0]
-    res = resolution or default_resolution(mech, mechanism.orientation_rad())
-    refined_rows = DesignEvaluator(mechanism, res * refine_factor, 1).evaluate(x[None, :])
+    res = resolution or default_resolution(mech, mechanism.orientation_rad(), None, method)
+    refined_rows = DesignEvaluator(mechanism, res * refine_factor, 1, method).evaluate(x[None, :])
     refined = evaluation_frame(refined_rows).iloc[0]
     for field in EVALUATION_FIELDS:
         if field != "valid":
@@ -290,6 +306,7 @@ def _best_row(
     best["objective_value_refined"] = float(objective_values(objective.name, refined_rows, objective.w_d)[0])
     best["objective_error"] = abs(best["objective_value_refined"] - best["objective_value"])
     best["resolution"] = int(res)
+    best["method"] = str(method)
     best["volume_unit"] = mech.volume_unit(mechanism.orientation_rad())
     unit = OBJECTIVES[objective.name].unit
     best["objective_unit"] = best["volume_unit"] if unit == "volume" else unit

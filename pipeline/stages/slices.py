@@ -16,6 +16,9 @@ from kinematics.workspace import evaluate
 
 #: slice resolution of the workspace figures (grid points per plotted axis)
 SLICE_RESOLUTION = 120
+#: the slices' sampling: the cell-centre grid over the whole pose box (a figure draws the nodes
+#: and integrates nothing; ``method="grid"`` would crop its grid to the workspace's extent)
+SLICE_METHOD = "midpoint"
 _SYMBOLS = {"theta": "θ", "psi": "ψ", "phi": "φ", "mixed": "η", "gdi": "GDI", "suri": "SURI", "volume": "V"}
 
 
@@ -62,6 +65,7 @@ def workspace_slice(mech: Mechanism, orientation: tuple[float, float], min_ic: f
         length=length,
         fixed=fixed,
         resolution=SLICE_RESOLUTION,
+        method=SLICE_METHOD,
         return_samples=True,
         error_estimate=False,
     )

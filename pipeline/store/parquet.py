@@ -89,6 +89,12 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "volume_refined": ("volume_unit", "V at refine_factor x the resolution"),
     "gdi_refined": ("1", "GDI at refine_factor x the resolution"),
     "resolution": ("", "grid points per sampled axis of the run's evaluations"),
+    "method": (
+        "",
+        "workspace integration method of the run's evaluations (evaluate.method): grid (boundary "
+        "fractions, second order) or midpoint (cell-centre count, first order); null in runs made "
+        "before it was recorded (they used midpoint)",
+    ),
     "at_bounds": ("", "design variables on a bound of the design box, as name=lower or name=upper"),
     "optimizer_value": ("objective_unit", "what the configured optimiser found, before polish"),
     "found_by": ("", "where the reported optimum comes from: the optimiser or its polish step"),

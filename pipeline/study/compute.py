@@ -70,8 +70,10 @@ def compute(c: Config, run_dir: Path, timings: dict, stages: dict) -> dict[str, 
     with parallel_backend(c.parallel):
         t0 = time.perf_counter()
         designs = _stage(stages, "sample", sample_designs, cache_dir, mech.design, c.sample)
+        # resolution and integration method are arguments of every evaluating stage: both in its cache key
+        resolution, method = c.evaluate.resolution, c.evaluate.method
         evaluated = _stage(
-            stages, "evaluate", evaluate_designs, cache_dir, mech, c.evaluate.resolution, designs, n_jobs=n_jobs
+            stages, "evaluate", evaluate_designs, cache_dir, mech, resolution, method, designs, n_jobs=n_jobs
         )
         timings["sample_evaluate"] = time.perf_counter() - t0
         scores = objective_values(objective.name, evaluated[list(EVALUATION_FIELDS)].to_numpy(float), objective.w_d)
@@ -88,7 +90,8 @@ def compute(c: Config, run_dir: Path, timings: dict, stages: dict) -> dict[str, 
                 reference_stage,
                 cache_dir,
                 mech,
-                c.evaluate.resolution,
+                resolution,
+                method,
                 c.evaluate.refine_factor,
                 objective,
                 n_jobs=n_jobs,
@@ -102,7 +105,8 @@ def compute(c: Config, run_dir: Path, timings: dict, stages: dict) -> dict[str, 
             optimise_design,
             cache_dir,
             mech,
-            c.evaluate.resolution,
+            resolution,
+            method,
             c.evaluate.refine_factor,
             objective,
             optimizer,
