@@ -195,10 +195,15 @@ class Delta(Mechanism):
         range ``theta_i - theta_min``, ``theta_max - theta_i`` (rad; NaN where the leg cannot
         close) and the forearm limit ``lb sin(passive_limit) - |y_i|`` (mm)."""
         poses = self._check_poses(poses)
+        side = self.lb * math.sin(math.radians(self.passive_limit))
+        if kernels.compiled():
+            lo, hi = math.radians(self.theta_min), math.radians(self.theta_max)
+            return _delta_margins(
+                np.ascontiguousarray(poses), self._cos, self._sin, self.R - self.r, self.la, self.lb, lo, hi, side
+            )
         u, y_leg, z = self._leg_frame(poses)
         rho = np.hypot(2.0 * self.la * u, 2.0 * self.la * z)
         c = u**2 + y_leg**2 + z**2 + self.la**2 - self.lb**2
-        side = self.lb * math.sin(math.radians(self.passive_limit))
         return np.hstack([rho - c, rho + c, self._actuator_margins(poses), side - np.abs(y_leg)])
 
     # ------------------------------------------------------------- kernels
@@ -335,4 +340,34 @@ def _delta_reachable_jacobians(poses, cos_az, sin_az, offset, la, lb, theta_lo, 
                     out[p, i, j] = g / d_theta * column_scale[j]
                 else:  # singular leg: +-inf (0 / 0: NaN), as numpy divides
                     out[p, i, j] = (np.nan if g == 0.0 else math.copysign(np.inf, g)) * column_scale[j]
+    return out
+
+
+@kernels.vector_jit
+def _delta_margins(poses, cos_az, sin_az, offset, la, lb, theta_lo, theta_hi, max_side):
+    """Kernel of :meth:`Delta.constraint_margins` (the same operations, one pose at a time):
+    per pose (x, y, z) (mm) the 15 margins, leg by leg in its own frame (as
+    :func:`_delta_reachable_jacobians`)."""
+    count = poses.shape[0]
+    out = np.empty((count, 15))
+    two_pi = 2.0 * math.pi
+    for p in range(count):
+        x, y, z = poses[p, 0], poses[p, 1], poses[p, 2]
+        for i in range(3):
+            x_leg = cos_az[i] * x + sin_az[i] * y
+            y_leg = -sin_az[i] * x + cos_az[i] * y
+            u = x_leg - offset
+            a = 2.0 * la * u
+            b = -2.0 * la * z
+            c = u * u + y_leg * y_leg + z * z + la * la - lb * lb
+            rho = math.hypot(a, b)
+            out[p, i] = rho - c
+            out[p, 3 + i] = rho + c
+            ratio = c / rho if rho > 0.0 else np.nan
+            theta = np.nan
+            if abs(ratio) <= 1.0:
+                theta = (math.atan2(b, a) - math.acos(ratio) + math.pi) % two_pi - math.pi
+            out[p, 6 + i] = theta - theta_lo
+            out[p, 9 + i] = theta_hi - theta
+            out[p, 12 + i] = max_side - abs(y_leg)
     return out

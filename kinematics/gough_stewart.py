@@ -442,6 +442,20 @@ class GoughStewart(Mechanism):
         (:meth:`cone_angles`; >= 0 exactly where the angle is within its limit): (N, 24);
         legs are always real."""
         poses = self._check_poses(poses)
+        if kernels.compiled():
+            one = _one_orientation(poses)
+            return _margins(
+                np.ascontiguousarray(poses),
+                np.ascontiguousarray(rotation(poses[:1])[0]) if one else np.empty((0, 3, 3)),
+                np.ascontiguousarray(self.base),
+                np.ascontiguousarray(self.platform),
+                np.ascontiguousarray(self.base_axes),
+                np.ascontiguousarray(self.platform_axes),
+                self.q_min,
+                self.q_max,
+                math.cos(math.radians(self.cone_base)),
+                math.cos(math.radians(self.cone_platform)),
+            )
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
             _, legs = self._legs(poses)
             q = np.sqrt(np.einsum("nki,nki->nk", legs, legs))
@@ -963,4 +977,34 @@ def _reachable_jacobians(
             out[p, :, :] = np.nan
             continue
         out[p, :, :] = jac
+    return out
+
+
+@kernels.vector_jit
+def _margins(poses, one_rotation, base, platform, base_axes, platform_axes, q_min, q_max, cos_base, cos_platform):
+    """Kernel of :meth:`GoughStewart.constraint_margins` (the same operations, one pose at a time):
+    per pose (N, 6) the 24 margins; ``one_rotation`` as in :func:`_reachable_jacobians`."""
+    count = poses.shape[0]
+    out = np.empty((count, 24))
+    rot = np.empty((3, 3))
+    rate = np.empty((3, 3))
+    if one_rotation.shape[0] == 3:
+        rot[:, :] = one_rotation
+    for p in range(count):
+        if one_rotation.shape[0] != 3:
+            _rotation_and_rate_map(poses[p, 3], poses[p, 4], poses[p, 5], rot, rate)
+        for i in range(6):
+            ax = rot[0, 0] * platform[i, 0] + rot[0, 1] * platform[i, 1] + rot[0, 2] * platform[i, 2]
+            ay = rot[1, 0] * platform[i, 0] + rot[1, 1] * platform[i, 1] + rot[1, 2] * platform[i, 2]
+            az = rot[2, 0] * platform[i, 0] + rot[2, 1] * platform[i, 1] + rot[2, 2] * platform[i, 2]
+            lx, ly, lz = ax + poses[p, 0] - base[i, 0], ay + poses[p, 1] - base[i, 1], az + poses[p, 2] - base[i, 2]
+            length = math.sqrt(lx * lx + ly * ly + lz * lz)
+            ux, uy, uz = lx / length, ly / length, lz / length
+            mx = rot[0, 0] * platform_axes[i, 0] + rot[0, 1] * platform_axes[i, 1] + rot[0, 2] * platform_axes[i, 2]
+            my = rot[1, 0] * platform_axes[i, 0] + rot[1, 1] * platform_axes[i, 1] + rot[1, 2] * platform_axes[i, 2]
+            mz = rot[2, 0] * platform_axes[i, 0] + rot[2, 1] * platform_axes[i, 1] + rot[2, 2] * platform_axes[i, 2]
+            out[p, i] = length - q_min
+            out[p, 6 + i] = q_max - length
+            out[p, 12 + i] = ux * base_axes[i, 0] + uy * base_axes[i, 1] + uz * base_axes[i, 2] - cos_base
+            out[p, 18 + i] = ux * mx + uy * my + uz * mz - cos_platform
     return out

@@ -282,15 +282,32 @@ class H4(Mechanism):
         where a radicand is negative its root ``s_i`` is continued as ``-sqrt(-radicand)``, so
         the bounds stay continuous across the reach boundary."""
         poses = self._check_poses(poses)
+        if self.ball_joint_limit is None:
+            reach = np.full(4, np.inf)
+        else:
+            reach = self.M * np.sin(np.radians(self.ball_joint_limit))
+        if kernels.compiled():
+            cos_theta, sin_theta = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 3]))
+            return _h4_margins(
+                np.ascontiguousarray(poses),
+                cos_theta,
+                sin_theta,
+                self.a,
+                self.b,
+                self.P,
+                self.Q,
+                self.M,
+                self.stroke,
+                float(axis_lo),
+                float(axis_hi),
+                reach,
+            )
         dx, dy, _, _ = self._horizontal(poses)
         radicand = self.M**2 - dx**2 - dy**2
         drop = np.sign(radicand) * np.sqrt(np.abs(radicand))
         i, j = np.nonzero(~np.eye(4, dtype=bool))
         pairs = self.stroke - drop[:, i] + drop[:, j]
-        if self.ball_joint_limit is None:
-            joints = np.full((poses.shape[0], 4), np.inf)
-        else:
-            joints = self.M * np.sin(np.radians(self.ball_joint_limit)) - np.hypot(dx, dy)
+        joints = reach - np.hypot(dx, dy)
         return np.hstack([pairs, self.stroke - drop - axis_lo, axis_hi + drop, radicand, joints])
 
     def exact_axis_columns(
@@ -602,3 +619,29 @@ def _h4_jacobians(poses, a, b, P, Q, M, column_scale):
                 continue
             _jacobian_row(jac, p, i, dx, dy, math.sqrt(disc), P[i], c, s, column_scale)
     return jac
+
+
+@kernels.vector_jit
+def _h4_margins(poses, cos_theta, sin_theta, a, b, P, Q, M, stroke, axis_lo, axis_hi, reach):
+    """Kernel of :meth:`H4.exact_axis_margins` (the same operations, one pose at a time): per
+    (x, y, theta) pose the 28 margins, (N, 28)."""
+    count = poses.shape[0]
+    out = np.empty((count, 28))
+    drops = np.empty(4)
+    for p in range(count):
+        x, y, c, s = poses[p, 0], poses[p, 1], cos_theta[p], sin_theta[p]
+        for i in range(4):
+            dx, dy, radicand = _leg(x, y, c, s, a[i], b[i], P[i], Q[i], M[i])
+            drops[i] = math.sqrt(radicand) if radicand >= 0.0 else -math.sqrt(-radicand)
+            out[p, 20 + i] = radicand
+            out[p, 24 + i] = reach[i] - math.hypot(dx, dy)
+        k = 0
+        for i in range(4):
+            for j in range(4):
+                if i != j:
+                    out[p, k] = stroke - drops[i] + drops[j]
+                    k += 1
+        for i in range(4):
+            out[p, 12 + i] = stroke - drops[i] - axis_lo
+            out[p, 16 + i] = axis_hi + drops[i]
+    return out

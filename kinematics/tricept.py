@@ -316,6 +316,26 @@ class Tricept(Mechanism):
         ``cos(tilt) - cos(tilt_limit)`` of the central joint; legs are always real. The legs
         are computed once (this runs on every grid edge the workspace boundary crosses)."""
         poses = self._check_poses(poses)
+        if kernels.compiled():
+            cos_psi, sin_psi = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 1]))
+            cos_theta, sin_theta = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 2]))
+            return _tricept_margins(
+                np.ascontiguousarray(poses),
+                cos_psi,
+                sin_psi,
+                cos_theta,
+                sin_theta,
+                np.ascontiguousarray(self.p),
+                np.ascontiguousarray(self.base),
+                np.ascontiguousarray(self._home_axes),
+                self.q_min,
+                self.q_max,
+                math.cos(self.cone_limit),
+                self.cone_joints in ("both", "base"),
+                self.cone_joints in ("both", "platform"),
+                self.cone_reference == "home",
+                math.cos(math.radians(self.tilt_limit)) if self.tilt_limit is not None else np.nan,
+            )
         rot = self._rotation(poses[:, 1], poses[:, 2])
         legs = (rot @ self.p.T).transpose(0, 2, 1) - self.base
         legs[..., 2] += poses[:, 0:1]
@@ -545,4 +565,65 @@ def _tricept_reachable_jacobians(
             out[p, i, 2] = mom_y * column_scale[2]
         if not ok:
             out[p, :, :] = np.nan
+    return out
+
+
+@kernels.vector_jit
+def _tricept_margins(
+    poses,
+    cos_psi,
+    sin_psi,
+    cos_theta,
+    sin_theta,
+    platform,
+    base,
+    home_axes,
+    q_min,
+    q_max,
+    cone_cos,
+    base_limited,
+    platform_limited,
+    home_reference,
+    tilt_cos,
+):
+    """Kernel of :meth:`Tricept.constraint_margins` (the same operations, one pose at a time):
+    per pose (c, psi, theta) the leg range margins (mm), then the cone margins of the limited
+    joints (base, then platform) and the tilt margin (``tilt_cos`` NaN: no tilt limit)."""
+    count = poses.shape[0]
+    columns = 6 + 3 * (int(base_limited) + int(platform_limited)) + int(not np.isnan(tilt_cos))
+    out = np.empty((count, columns))
+    rot = np.empty((3, 3))
+    for p in range(count):
+        c = poses[p, 0]
+        cp, sp, ct, st = cos_psi[p], sin_psi[p], cos_theta[p], sin_theta[p]
+        rot[0, 0], rot[0, 1], rot[0, 2] = ct, sp * st, cp * st
+        rot[1, 0], rot[1, 1], rot[1, 2] = 0.0, cp, -sp
+        rot[2, 0], rot[2, 1], rot[2, 2] = -st, ct * sp, ct * cp
+        for i in range(3):
+            ax = rot[0, 0] * platform[i, 0] + rot[0, 1] * platform[i, 1] + rot[0, 2] * platform[i, 2]
+            ay = rot[1, 0] * platform[i, 0] + rot[1, 1] * platform[i, 1] + rot[1, 2] * platform[i, 2]
+            az = rot[2, 0] * platform[i, 0] + rot[2, 1] * platform[i, 1] + rot[2, 2] * platform[i, 2]
+            lx, ly, lz = ax - base[i, 0], ay - base[i, 1], az - base[i, 2] + c
+            q = math.sqrt(lx * lx + ly * ly + lz * lz)
+            out[p, i] = q - q_min
+            out[p, 3 + i] = q_max - q
+            nx, ny, nz = lx / q, ly / q, lz / q
+            if home_reference:
+                hx, hy, hz = home_axes[i, 0], home_axes[i, 1], home_axes[i, 2]
+                base_cos = nx * hx + ny * hy + nz * hz
+                mx = rot[0, 0] * hx + rot[0, 1] * hy + rot[0, 2] * hz
+                my = rot[1, 0] * hx + rot[1, 1] * hy + rot[1, 2] * hz
+                mz = rot[2, 0] * hx + rot[2, 1] * hy + rot[2, 2] * hz
+                platform_cos = nx * mx + ny * my + nz * mz
+            else:
+                base_cos = nz
+                platform_cos = nx * rot[0, 2] + ny * rot[1, 2] + nz * rot[2, 2]
+            k = 6
+            if base_limited:
+                out[p, k + i] = base_cos - cone_cos
+                k += 3
+            if platform_limited:
+                out[p, k + i] = platform_cos - cone_cos
+        if not np.isnan(tilt_cos):
+            out[p, columns - 1] = cp * ct - tilt_cos
     return out

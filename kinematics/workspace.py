@@ -428,7 +428,7 @@ def _bisect(
     p_in: np.ndarray,
     p_out: np.ndarray,
     start: np.ndarray,
-    steps: int,
+    steps: int | None,
     ic_out: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The boundary crossing between an inside (``p_in``) and an outside (``p_out``) value of
@@ -454,7 +454,7 @@ def _bisect(
 
     Rows the margins cannot place (the mechanism has none, one is undefined at an end, or
     none changes sign) are bisected ``steps`` times by the membership test instead
-    (:func:`_bisect_membership`, to ``h / 2**(steps+1)``).
+    (:func:`_bisect_membership`, to ``h / 2**(steps+1)``); ``steps=None`` leaves them NaN.
 
     Returns
     -------
@@ -476,32 +476,31 @@ def _bisect(
         ends[rows + n, column] = p_out
         reach = values.margins(ends)
         reach = np.empty((2 * n, 0)) if reach is None else reach
-        g_in = np.column_stack([reach[:n], _dexterity_margin(ic_in, limit)])
-        g_out = np.column_stack([reach[n:], _dexterity_margin(ic_out, limit)])
+        dex_in, dex_out = _dexterity_margin(ic_in, limit), _dexterity_margin(ic_out, limit)
         linear, refined = (
             (_linear_crossing_compiled, _refined_crossing_compiled)
             if kernels.compiled()
             else (_linear_crossing, _refined_crossing)
         )
-        first = linear(np.ascontiguousarray(g_in), np.ascontiguousarray(g_out))
+        first = linear(np.ascontiguousarray(reach), dex_in, dex_out)
         look = np.nonzero(np.isfinite(first))[0]
         t1 = first[look]
         at = probe[look].copy()
         at[np.arange(look.size), column[look]] = p_in[look] + t1 * (p_out[look] - p_in[look])
         inside_1, weight_1, ic_1, _ = values(at)
         reach_1 = values.margins(at) if reach.shape[1] else np.empty((look.size, 0))
-        g_1 = np.column_stack([reach_1, _dexterity_margin(ic_1, limit)])
-        t2, which = refined(np.ascontiguousarray(g_in[look]), g_1, np.ascontiguousarray(g_out[look]), t1)
+        dex_1 = _dexterity_margin(ic_1, limit)
+        t2, which = refined(reach, np.ascontiguousarray(reach_1), dex_in, dex_1, dex_out, look, t1)
         t[look] = t2
         reachable_1 = np.isfinite(ic_1)
         if start.shape[0]:
-            dexterous_first = reachable_1 & (which == g_1.shape[1] - 1)
+            dexterous_first = reachable_1 & (which == reach.shape[1])
             ic_there = np.where(dexterous_first, limit, np.nan_to_num(ic_1))
             at_value = np.array(_integrands(reachable_1, weight_1, ic_there, start.shape[0]))
             value[:, look[reachable_1]] = at_value[:, reachable_1]
     crossing = p_in + t * (p_out - p_in)
     left = np.nonzero(np.isnan(t))[0]
-    if left.size:
+    if left.size and steps is not None:
         crossing[left], value[:, left] = _bisect_membership(
             values, probe[left], column[left], p_in[left], p_out[left], start[:, left], steps
         )
@@ -516,12 +515,20 @@ def _dexterity_margin(ic: np.ndarray, limit: float) -> np.ndarray:
     return np.asarray(ic) ** 2 - limit**2
 
 
-def _linear_crossing(g_in: np.ndarray, g_out: np.ndarray) -> np.ndarray:
-    """Step 1 of :func:`_bisect`: per row of the margins (N, K) at the inside and the outside
-    end (the last column the dexterity margin, which may be unknown at either end), the first
-    sign change of the margins linear between the ends, as a fraction of the way in [0, 1];
-    NaN where the margins cannot place it (a reachability margin unknown at an end, one
-    negative at the inside end, or none known at both ends and negative at the outside)."""
+def _stacked(reach: np.ndarray, dex: np.ndarray) -> np.ndarray:
+    """Margins (N, K) and the dexterity margin (N,) as one array (N, K + 1)."""
+    return np.column_stack([reach, dex])
+
+
+def _linear_crossing(reach: np.ndarray, dex_in: np.ndarray, dex_out: np.ndarray) -> np.ndarray:
+    """Step 1 of :func:`_bisect`: per row the first sign change of the margins linear between
+    the inside and the outside end, as a fraction of the way in [0, 1]. ``reach`` (2N, K):
+    the reachability margins at the N inside ends, then at the N outside ends; ``dex_in``,
+    ``dex_out`` (N,): the dexterity margin there (NaN where unknown). NaN where the margins
+    cannot place it (a reachability margin unknown at an end, one negative at the inside end,
+    or none known at both ends and negative at the outside)."""
+    n = dex_in.size
+    g_in, g_out = _stacked(reach[:n], dex_in), _stacked(reach[n:], dex_out)
     known = ~np.isnan(g_in) & ~np.isnan(g_out)
     with np.errstate(invalid="ignore", divide="ignore"):
         usable = (
@@ -533,12 +540,25 @@ def _linear_crossing(g_in: np.ndarray, g_out: np.ndarray) -> np.ndarray:
     return np.where(usable, np.clip(first, 0.0, 1.0), np.nan)
 
 
-def _refined_crossing(g0: np.ndarray, gm: np.ndarray, g1: np.ndarray, tm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Step 2 of :func:`_bisect`: the first root in [0, 1] of the margins (N, K) through
-    ``(0, g0)``, ``(tm, gm)``, ``(1, g1)`` (``tm`` (N,) in [0, 1]): each margin a parabola
-    through its three values, or the line through the first two where ``g1`` is unknown.
-    Returns the root (``tm`` where no margin has one there) and the column of the first
-    margin (-1 where none)."""
+def _refined_crossing(
+    reach: np.ndarray,
+    reach_mid: np.ndarray,
+    dex_in: np.ndarray,
+    dex_mid: np.ndarray,
+    dex_out: np.ndarray,
+    rows: np.ndarray,
+    tm: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Step 2 of :func:`_bisect` on the ``rows`` (M,) of :func:`_linear_crossing`'s arrays, with
+    the margins ``reach_mid`` (M, K), ``dex_mid`` (M,) at ``tm`` (M,), the fraction of step 1:
+    the first root in [0, 1] of each margin as the parabola through its three values (the line
+    through the first two where the outside end's is unknown). Returns the root (``tm`` where
+    no margin has one there) and the column of the first margin (K: the dexterity margin; -1:
+    none)."""
+    n = dex_in.size
+    g0 = _stacked(reach[:n][rows], dex_in[rows])
+    g1 = _stacked(reach[n:][rows], dex_out[rows])
+    gm = _stacked(reach_mid, dex_mid)
     t = tm[:, None]
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         c2 = ((gm - g0) - t * (g1 - g0)) / (t * (t - 1.0))
@@ -559,21 +579,25 @@ def _refined_crossing(g0: np.ndarray, gm: np.ndarray, g1: np.ndarray, tm: np.nda
 
 
 @kernels.vector_jit
-def _linear_crossing_compiled(g_in, g_out):
+def _linear_crossing_compiled(reach, dex_in, dex_out):
     """:func:`_linear_crossing`, one row at a time (the same operations)."""
-    n, k = g_in.shape
+    n = dex_in.shape[0]
+    k = reach.shape[1]
     out = np.empty(n)
     for r in range(n):
         first = np.inf
         usable = True
         any_negative = False
-        for c in range(k):
-            a, b = g_in[r, c], g_out[r, c]
+        for c in range(k + 1):
+            a = reach[r, c] if c < k else dex_in[r]
+            b = reach[n + r, c] if c < k else dex_out[r]
             known = not (np.isnan(a) or np.isnan(b))
-            if c < k - 1 and not known:
+            if c < k and not known:
                 usable = False
+                break
             if not np.isnan(a) and a < 0.0:
                 usable = False
+                break
             if known and b < 0.0:
                 any_negative = True
                 first = min(first, a / (a - b))
@@ -582,24 +606,31 @@ def _linear_crossing_compiled(g_in, g_out):
 
 
 @kernels.vector_jit
-def _refined_crossing_compiled(g0, gm, g1, tm):
+def _refined_crossing_compiled(reach, reach_mid, dex_in, dex_mid, dex_out, rows, tm):
     """:func:`_refined_crossing`, one row at a time (the same operations)."""
-    n, k = g0.shape
-    first = np.empty(n)
-    which = np.empty(n, dtype=np.int64)
-    for r in range(n):
-        t = tm[r]
+    n = dex_in.shape[0]
+    k = reach.shape[1]
+    m = rows.shape[0]
+    first = np.empty(m)
+    which = np.empty(m, dtype=np.int64)
+    for q in range(m):
+        r = rows[q]
+        t = tm[q]
         best = np.inf
         best_c = -1
-        for c in range(k):
-            a, m, b = g0[r, c], gm[r, c], g1[r, c]
-            if np.isnan(m) or np.isnan(a):
+        for c in range(k + 1):
+            a = reach[r, c] if c < k else dex_in[r]
+            mid = reach_mid[q, c] if c < k else dex_mid[q]
+            b = reach[n + r, c] if c < k else dex_out[r]
+            if np.isnan(mid) or np.isnan(a):
                 continue
             if np.isnan(b) or t <= 0.0 or t >= 1.0:
-                s = t * a / (a - m)
-                root = s if (m < a and s >= 0.0 and s <= 1.0) else np.inf
+                s = t * a / (a - mid)
+                root = s if (mid < a and s >= 0.0 and s <= 1.0) else np.inf
             else:
-                c2 = ((m - a) - t * (b - a)) / (t * (t - 1.0))
+                c2 = ((mid - a) - t * (b - a)) / (t * (t - 1.0))
+                if a > 0.0 and mid > 0.0 and b > 0.0 and c2 <= 0.0:
+                    continue  # concave and positive at both ends: no root in [0, 1]
                 c1 = b - a - c2
                 disc = c1 * c1 - 4.0 * c2 * a
                 root = np.inf
@@ -612,9 +643,9 @@ def _refined_crossing_compiled(g0, gm, g1, tm):
                 best = root
                 best_c = c
         if best < np.inf:
-            first[r], which[r] = best, best_c
+            first[q], which[q] = best, best_c
         else:
-            first[r], which[r] = t, -1
+            first[q], which[q] = t, -1
     return first, which
 
 
@@ -1005,7 +1036,7 @@ def _cut_cell_value(inside, f0, f1, p, c, near, toward, crossing_values, strides
     return fraction * max(v0, 0.0), fraction * max(v1, 0.0)
 
 
-@kernels.jit
+@kernels.vector_jit
 def _cut_cell_corrections(
     inside, f0, f1, node, entry, axis, crossing, value, positions, strides, sizes, steps_of, max_slope
 ):
@@ -1258,16 +1289,16 @@ def _occupied_box(
     Why: a mechanism's box is a bound from the geometry and the workspace may
     fill a fraction of it (Tricept: c in about 300-650 of 0-926 mm); the grid's
     cells then go where the workspace is. On a grid of about 1/8 of the nodes
-    (``resolution / COARSE**(3/d)`` per axis, d the sampled axes) the extent along axis j is the lowest / highest boundary crossing along j,
-    found by bisecting the edges below the lowest (above the highest) layer of
-    inside nodes, widened by one coarse cell (the extreme may lie between
-    coarse grid lines) and clipped to the box; a workspace in the first or
-    last layer keeps that face. Each crossing moves continuously with the
-    design (to the bisection's resolution), and so does their minimum: the
-    grid, and the integral, stay continuous: the few extreme edges are cut in
-    :data:`SECTIONS` parts ``rounds`` times (:func:`_multisect`, one call per round), so that
-    the box moves by no more than ``SECTIONS**-rounds`` (``2**-12``) of a coarse cell at a
-    time. An empty coarse grid keeps the box.
+    (``resolution / COARSE**(3/d)`` per axis, d the sampled axes) the extent along axis j is
+    the lowest / highest boundary crossing on the edges below the lowest (above the highest)
+    layer of inside nodes, widened by one coarse cell (so that the box holds the whole edge,
+    wherever on it the crossing lies) and clipped to the box; a workspace in the first or
+    last layer keeps that face. Each crossing moves continuously with the design, and so
+    does their minimum: the grid, and the integral, stay continuous. The crossings are
+    placed on the margins (:func:`_bisect`); where the mechanism has none the few extreme
+    edges are cut in :data:`SECTIONS` parts ``rounds`` times (:func:`_multisect`, one call
+    per round), so that the box moves by no more than ``SECTIONS**-rounds`` (``2**-12``) of a
+    coarse cell at a time. An empty coarse grid keeps the box.
     """
     coarse = max(int(resolution / COARSE ** (3 / len(sampled))), 4)
     axes, _ = _grid_axes(mechanism, coarse, orientation, fixed, 0.5, exact, box)
@@ -1297,14 +1328,15 @@ def _occupied_box(
                 )
             )
     if jobs:
-        crossing = _multisect(
-            values,
-            np.vstack([job[2] for job in jobs]),
-            np.concatenate([np.full(job[3].size, job[0]) for job in jobs]),
-            np.concatenate([job[3] for job in jobs]),
-            np.concatenate([job[4] for job in jobs]),
-            rounds,
-        )
+        probe = np.vstack([job[2] for job in jobs])
+        column = np.concatenate([np.full(job[3].size, job[0]) for job in jobs])
+        p_in, p_out = np.concatenate([job[3] for job in jobs]), np.concatenate([job[4] for job in jobs])
+        # on the margins where the mechanism has them (any crossing of the edge will do: the box
+        # is widened by the edge's length), by multisection elsewhere
+        crossing, _ = _bisect(values, probe.copy(), column, p_in, p_out, np.empty((0, p_in.size)), None)
+        left = np.nonzero(np.isnan(crossing))[0]
+        if left.size:
+            crossing[left] = _multisect(values, probe[left], column[left], p_in[left], p_out[left], rounds)
         start = 0
         for j, side, _, p_in, _ in jobs:
             stop = start + p_in.size
