@@ -27,7 +27,7 @@ import numpy as np
 import kinematics
 import pipeline
 from kinematics.workspace import default_resolution
-from pipeline.config import MechanismConfig
+from pipeline.config import EvaluateConfig, MechanismConfig
 from pipeline.evaluation import DesignEvaluator
 from pipeline.objectives import objective_values
 from pipeline.optimizers.base import Problem
@@ -44,6 +44,8 @@ PROBLEMS = {
 GOLDEN = Path(__file__).with_name("best_known.json")
 #: the error estimate re-evaluates the optimum at this multiple of the default resolution
 REFINE_FACTOR = 4
+#: the workspace integration of the problems: the pipeline's default (``evaluate.method``)
+METHOD = EvaluateConfig().method
 
 
 def objective_digest() -> str:
@@ -60,7 +62,7 @@ def make_problem(name: str, n_jobs: int = 2, resolution: int | None = None) -> P
     """The problem ``name`` of :data:`PROBLEMS` as the pipeline builds it (maximised, design units)."""
     mechanism, objective, w_d = PROBLEMS[name]
     config = MechanismConfig(name=mechanism)
-    evaluator = DesignEvaluator(config, resolution, n_jobs)
+    evaluator = DesignEvaluator(config, resolution, n_jobs, METHOD)
     return Problem(
         lambda x: objective_values(objective, evaluator.evaluate(x), w_d), config.design.lower, config.design.upper
     )
@@ -68,7 +70,7 @@ def make_problem(name: str, n_jobs: int = 2, resolution: int | None = None) -> P
 
 def default_resolution_of(name: str, x: np.ndarray) -> int:
     config = MechanismConfig(name=PROBLEMS[name][0])
-    return int(default_resolution(config.build(x), config.orientation_rad()))
+    return int(default_resolution(config.build(x), config.orientation_rad(), None, METHOD))
 
 
 def compute(name: str) -> dict:
@@ -92,6 +94,7 @@ def compute(name: str) -> dict:
             for s in found.searches
         ],
         "n_evaluations": found.n_evaluations,
+        "method": METHOD,
         "resolution": resolution,
         "value_refined": refined,
         "refine_factor": REFINE_FACTOR,

@@ -25,6 +25,10 @@ from kinematics import get_mechanism
 from kinematics.workspace import _grid_axes, default_resolution, evaluate
 
 TABLE1 = dict(d=13.52484, h=13.88781, Qz=35.18892)
+#: the integration measured here: the plain cell-centre count, the per-node kernels alone (the
+#: same integral as the naive loop below); the default boundary-fraction grid's error and cost
+#: are benchmarks/accuracy.py's
+METHOD = "midpoint"
 
 
 def naive_evaluation(mech, resolution: int, orientation, min_ic: float = 0.01):
@@ -61,7 +65,9 @@ def naive_evaluation(mech, resolution: int, orientation, min_ic: float = 0.01):
 
 def conditioned_count(mech, resolution: int, orientation) -> int:
     """Nodes whose z-interval is non-empty: the poses that get a condition number."""
-    ev = evaluate(mech, resolution=resolution, orientation=orientation, error_estimate=False, return_samples=True)
+    ev = evaluate(
+        mech, method=METHOD, resolution=resolution, orientation=orientation, error_estimate=False, return_samples=True
+    )
     return int(np.isfinite(ev.inverse_conditions).sum())
 
 
@@ -85,14 +91,14 @@ def main() -> None:
     args = parser.parse_args()
     mech = get_mechanism("h4", **TABLE1)
     orient = mech.default_orientation
-    res = default_resolution(mech)
+    res = default_resolution(mech, method=METHOD)
     print(f"H4, Table 1 design {TABLE1} cm, theta in [{orient[0]:.4f}, {orient[1]:.4f}] rad, 1/kappa > 0.01")
     print("\n1. convergence")
     print(f"{'resolution':>10} {'poses':>10} {'V [cm^3 rad]':>14} {'GDI':>8} {'seconds':>8}")
     results = {}
     for r in (4, 8, 12, 16, 24, 32, 48, 4 * res):
         t0 = time.perf_counter()
-        ev = evaluate(mech, resolution=r, error_estimate=False)
+        ev = evaluate(mech, method=METHOD, resolution=r, error_estimate=False)
         dt = time.perf_counter() - t0
         results[r] = ev
         print(f"{r:>10} {ev.n_samples:>10} {ev.volume:>14.1f} {ev.gdi:>8.4f} {dt:>8.3f}")
@@ -102,12 +108,12 @@ def main() -> None:
     print(f"\n2. default resolution {res} vs 4x finer ({4 * res}):")
     print(f"   V error   {100 * (ev.volume - ref.volume) / ref.volume:+.3f} %  (goal: within 1 %)")
     print(f"   GDI error {100 * (ev.gdi - ref.gdi) / ref.gdi:+.3f} %")
-    est = evaluate(mech, resolution=res)
+    est = evaluate(mech, method=METHOD, resolution=res)
     print(
         f"   reported error estimate (vs the grid shifted by half a cell): V +-{est.volume_error:.1f}, GDI +-{est.gdi_error:.4f}"
     )
 
-    seconds = best_time(lambda: evaluate(mech, resolution=res, error_estimate=False), 7)
+    seconds = best_time(lambda: evaluate(mech, method=METHOD, resolution=res, error_estimate=False), 7)
     cond = conditioned_count(mech, res, orient)
     print(f"\n3. one evaluation at resolution {res}: {1e3 * seconds:.1f} ms (one core)")
     print(f"   sampled poses/s/core:     {ev.n_samples / seconds:>12,.0f}")
@@ -121,11 +127,11 @@ def main() -> None:
     )
 
     r = args.naive_resolution or res
-    fast = best_time(lambda: evaluate(mech, resolution=r, error_estimate=False), 5)
+    fast = best_time(lambda: evaluate(mech, method=METHOD, resolution=r, error_estimate=False), 5)
     t0 = time.perf_counter()
     v_naive, gdi_naive = naive_evaluation(mech, r, orient)
     slow = time.perf_counter() - t0
-    ev_r = evaluate(mech, resolution=r, error_estimate=False)
+    ev_r = evaluate(mech, method=METHOD, resolution=r, error_estimate=False)
     print(f"\n4. side by side at resolution {r} ({ev_r.n_samples} poses):")
     print(
         f"   vectorised {1e3 * fast:.2f} ms, naive loop with numpy.linalg.cond {1e3 * slow:.1f} ms:"

@@ -75,8 +75,8 @@ def surgiscope_evaluation(
     theta_min: float | None = None,
     theta_max: float | None = None,
 ) -> tuple[float, float, float]:
-    """Volume (m³), its half-cell-shift error (m³) and GDI of :func:`surgiscope` by the pipeline's
-    evaluator at ``resolution``, with no dexterity limit (the paper's workspace is geometric)."""
+    """Volume (m³), its error estimate (m³: the change at half the resolution) and GDI of
+    :func:`surgiscope` by the pipeline's evaluator (the boundary-fraction grid) at ``resolution``, with no dexterity limit (the paper's workspace is geometric)."""
     ev = evaluate(surgiscope(arm, forearm, theta_min, theta_max), resolution=resolution, min_inverse_condition=0.0)
     return ev.volume / 1e9, ev.volume_error / 1e9, ev.gdi
 
@@ -128,7 +128,7 @@ def delta(r: Reproduction) -> None:
     ]
     rows += [
         [
-            f"evaluator, resolution {res} (midpoint grid; ± its half-cell shift)",
+            f"evaluator, resolution {res} (boundary-fraction grid; ± its change at half the resolution)",
             f"{volume:.4f} ± {error:.4f}",
             rel(volume, p["volume"]),
         ]
