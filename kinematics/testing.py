@@ -35,6 +35,12 @@ becomes that check's line, ``"<check>: raised <Type>: <message>"``):
 ``pose-bounds``
     Poses reached by ``forward(q)`` for ``q`` drawn in ``actuator_range``
     (within the joint limits and the orientation range) lie inside ``pose_bounds``.
+``margins``
+    Where the class states reachability margins
+    (:meth:`~kinematics.base.Mechanism.constraint_margins`, or per column of an exact axis
+    :meth:`~kinematics.base.Mechanism.exact_axis_margins`): one row per pose, all
+    ``>= 0`` exactly where the pose (column) is reachable, and the compiled path, if any,
+    gives the numpy reference's margins.
 ``workspace``
     The centre design's workspace (:func:`kinematics.workspace.evaluate` at
     ``min_resolution``) is not empty, and the compiled path, if the class
@@ -365,6 +371,47 @@ def _check_pose_bounds(mech: Mechanism, rng: np.random.Generator, n_actuators: i
     ]
 
 
+def _margins_and_reach(mech: Mechanism, poses: np.ndarray) -> tuple[np.ndarray | None, np.ndarray]:
+    """The stated margins of ``poses`` (None: none) and whether each is reachable (actuator range,
+    joint limits; for an exact axis: the column's interval non-empty within the pose box)."""
+    probe = mech.invariant_axis_interval(poses[:1])
+    if probe is None:
+        q = mech.inverse(poses)
+        q_lo, q_hi = mech.actuator_range
+        with np.errstate(invalid="ignore"):
+            reach = np.all((q >= q_lo) & (q <= q_hi), axis=1)
+        return mech.constraint_margins(poses), reach & mech.within_joint_limits(poses)
+    axis = probe[0]
+    lo, hi = mech.pose_bounds(mech.default_orientation)
+    _, lower, upper = mech.invariant_axis_interval(poses)
+    reach = np.minimum(upper, hi[axis]) > np.maximum(lower, lo[axis])
+    return mech.exact_axis_margins(poses, lo[axis], hi[axis]), reach & mech.within_joint_limits(poses)
+
+
+def _check_margins(mech: Mechanism, poses: np.ndarray) -> list[str]:
+    margins, reach = _margins_and_reach(mech, poses)
+    if margins is None:
+        return []
+    margins = np.asarray(margins, dtype=float)
+    if margins.ndim != 2 or margins.shape[0] != poses.shape[0]:
+        return [f"margins: expected one row per pose, shape ({poses.shape[0]}, K); got {margins.shape}"]
+    with np.errstate(invalid="ignore"):
+        says = np.all(margins >= 0, axis=1)
+    wrong = np.nonzero(says != reach)[0]
+    out = []
+    if wrong.size:
+        k = wrong[0]
+        out.append(
+            f"margins: {wrong.size} of {poses.shape[0]} poses disagree with reachability, e.g. pose "
+            f"{_fmt(poses[k])}: reachable {bool(reach[k])}, margins {_fmt(margins[k])}"
+        )
+    with kernels.reference_kernels():
+        reference, _ = _margins_and_reach(mech, poses)
+    if not np.allclose(margins, reference, rtol=COMPILED_RTOL, atol=1e-9, equal_nan=True):
+        out.append("margins: the compiled path's margins differ from the numpy reference's")
+    return out
+
+
 def _evaluation(mech: Mechanism, resolution: int) -> np.ndarray:
     ev = evaluate(mech, resolution=resolution, error_estimate=False)
     return np.array([ev.volume, ev.gdi, ev.suri])
@@ -462,6 +509,7 @@ def check_mechanism(
         ("ik-fk", lambda: _check_round_trip(mech, reachable)),
         ("jacobian", lambda: _check_jacobian(mech, reachable)),
         ("pose-bounds", lambda: _check_pose_bounds(mech, rng, 2 * n_poses)),
+        ("margins", lambda: _check_margins(mech, box)),
     ]
     for name, step in steps:
         try:

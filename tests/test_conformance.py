@@ -125,6 +125,13 @@ class StaleCompiledKernel(RPR2):
         return _rpr2_reachable_jacobians(poses, self.b, self.q_min, 9.0, column_scale)
 
 
+class MarginMissesALimit(RPR2):
+    name = "broken_margins"
+
+    def constraint_margins(self, poses):
+        return super().constraint_margins(poses)[:, :2]  # q - q_min only: forgets q_max
+
+
 class NotBuildableAtBound(RPR2):
     name = "broken_bound"
 
@@ -141,6 +148,7 @@ class NotBuildableAtBound(RPR2):
         (SmallPoseBox, "pose-bounds: "),
         (BatchDependent, "batch: inverse of pose 0 alone differs from row 0"),
         (StaleCompiledKernel, "workspace: the compiled path gives (V, GDI, SURI)"),
+        (MarginMissesALimit, "margins: "),
         (
             NotBuildableAtBound,
             "build: design with 'b' at its upper bound 10 (others at the centre) does not build: "
