@@ -299,6 +299,30 @@ class Delta(Mechanism):
         return self.assembly_modes(q)
 
 
+@kernels.inline_jit
+def _delta_leg(x, y, z, cos_az, sin_az, offset, la, lb):
+    """Leg i (azimuth ``cos_az``, ``sin_az``) at (x, y, z) (mm), in its own frame: ``y_i``, ``u``
+    and the terms ``A cos theta + B sin theta = C`` of :meth:`Delta._inverse` (mm, mm^2) with
+    ``rho = |(A, B)|``; the same operations as :meth:`Delta._leg_frame` and ``_inverse``."""
+    x_leg = cos_az * x + sin_az * y
+    y_leg = -sin_az * x + cos_az * y
+    u = x_leg - offset
+    a = 2.0 * la * u
+    b = -2.0 * la * z
+    c = u * u + y_leg * y_leg + z * z + la * la - lb * lb
+    return y_leg, u, a, b, c, math.hypot(a, b)
+
+
+@kernels.inline_jit
+def _elbow_out(a, b, c, rho):
+    """The elbow-out actuator angle (rad, in [-pi, pi)) of :meth:`Delta._inverse`; NaN where the
+    leg cannot close (``|C| > rho``)."""
+    ratio = c / rho if rho > 0.0 else np.nan
+    if not abs(ratio) <= 1.0:
+        return np.nan
+    return (math.atan2(b, a) - math.acos(ratio) + math.pi) % (2.0 * math.pi) - math.pi
+
+
 @kernels.jit
 def _delta_reachable_jacobians(poses, cos_az, sin_az, offset, la, lb, theta_lo, theta_hi, max_side, column_scale):
     """Per pose (N, 3) of (x, y, z) (mm), leg by leg in its own frame (azimuth
@@ -310,22 +334,14 @@ def _delta_reachable_jacobians(poses, cos_az, sin_az, offset, la, lb, theta_lo, 
     out (no IK, out of range or past the forearm limit)."""
     count = poses.shape[0]
     out = np.empty((count, 3, 3))
-    two_pi = 2.0 * math.pi
     for p in range(count):
         x, y, z = poses[p, 0], poses[p, 1], poses[p, 2]
         for i in range(3):
-            x_leg = cos_az[i] * x + sin_az[i] * y
-            y_leg = -sin_az[i] * x + cos_az[i] * y
-            u = x_leg - offset
-            a = 2.0 * la * u
-            b = -2.0 * la * z
-            c = u * u + y_leg * y_leg + z * z + la * la - lb * lb
-            rho = math.hypot(a, b)
-            ratio = c / rho if rho > 0.0 else np.nan
-            if not (abs(ratio) <= 1.0 and abs(y_leg) <= max_side):
+            y_leg, u, a, b, c, rho = _delta_leg(x, y, z, cos_az[i], sin_az[i], offset, la, lb)
+            theta = _elbow_out(a, b, c, rho)
+            if not (theta == theta and abs(y_leg) <= max_side):
                 out[p, :, :] = np.nan
                 break
-            theta = (math.atan2(b, a) - math.acos(ratio) + math.pi) % two_pi - math.pi
             if not (theta_lo <= theta <= theta_hi):
                 out[p, :, :] = np.nan
                 break
@@ -346,27 +362,16 @@ def _delta_reachable_jacobians(poses, cos_az, sin_az, offset, la, lb, theta_lo, 
 @kernels.vector_jit
 def _delta_margins(poses, cos_az, sin_az, offset, la, lb, theta_lo, theta_hi, max_side):
     """Kernel of :meth:`Delta.constraint_margins` (the same operations, one pose at a time):
-    per pose (x, y, z) (mm) the 15 margins, leg by leg in its own frame (as
-    :func:`_delta_reachable_jacobians`)."""
+    per pose (x, y, z) (mm) the 15 margins, leg by leg in its own frame (:func:`_delta_leg`)."""
     count = poses.shape[0]
     out = np.empty((count, 15))
-    two_pi = 2.0 * math.pi
     for p in range(count):
         x, y, z = poses[p, 0], poses[p, 1], poses[p, 2]
         for i in range(3):
-            x_leg = cos_az[i] * x + sin_az[i] * y
-            y_leg = -sin_az[i] * x + cos_az[i] * y
-            u = x_leg - offset
-            a = 2.0 * la * u
-            b = -2.0 * la * z
-            c = u * u + y_leg * y_leg + z * z + la * la - lb * lb
-            rho = math.hypot(a, b)
+            y_leg, _, a, b, c, rho = _delta_leg(x, y, z, cos_az[i], sin_az[i], offset, la, lb)
+            theta = _elbow_out(a, b, c, rho)
             out[p, i] = rho - c
             out[p, 3 + i] = rho + c
-            ratio = c / rho if rho > 0.0 else np.nan
-            theta = np.nan
-            if abs(ratio) <= 1.0:
-                theta = (math.atan2(b, a) - math.acos(ratio) + math.pi) % two_pi - math.pi
             out[p, 6 + i] = theta - theta_lo
             out[p, 9 + i] = theta_hi - theta
             out[p, 12 + i] = max_side - abs(y_leg)

@@ -436,6 +436,15 @@ class GoughStewart(Mechanism):
             plat <= math.radians(self.cone_platform), axis=1
         )
 
+    def _kernel_arguments(self, poses: np.ndarray) -> tuple:
+        """The leading arguments of the compiled leg kernels (:func:`_reachable_jacobians`,
+        :func:`_margins`): the poses, their one rotation when they share it (else shape
+        (0, 3, 3)), the joints and joint axes, the leg range (mm)."""
+        poses = np.ascontiguousarray(poses, dtype=float)
+        rot = np.ascontiguousarray(rotation(poses[:1])[0]) if _one_orientation(poses) else np.empty((0, 3, 3))
+        joints = (self.base, self.platform, self.base_axes, self.platform_axes)
+        return (poses, rot, *(np.ascontiguousarray(a) for a in joints), self.q_min, self.q_max)
+
     def constraint_margins(self, poses: np.ndarray) -> np.ndarray:
         """Margins of the leg range, ``q_i - q_min`` and ``q_max - q_i`` (mm), and of the cone
         limits, ``cos(angle) - cos(limit)`` of each base and platform cone angle
@@ -443,16 +452,8 @@ class GoughStewart(Mechanism):
         legs are always real."""
         poses = self._check_poses(poses)
         if kernels.compiled():
-            one = _one_orientation(poses)
             return _margins(
-                np.ascontiguousarray(poses),
-                np.ascontiguousarray(rotation(poses[:1])[0]) if one else np.empty((0, 3, 3)),
-                np.ascontiguousarray(self.base),
-                np.ascontiguousarray(self.platform),
-                np.ascontiguousarray(self.base_axes),
-                np.ascontiguousarray(self.platform_axes),
-                self.q_min,
-                self.q_max,
+                *self._kernel_arguments(poses),
                 math.cos(math.radians(self.cone_base)),
                 math.cos(math.radians(self.cone_platform)),
             )
@@ -484,16 +485,8 @@ class GoughStewart(Mechanism):
         if not kernels.compiled():
             return None
         poses = np.ascontiguousarray(poses, dtype=float)
-        rot = np.ascontiguousarray(rotation(poses[:1])[0]) if _one_orientation(poses) else np.empty((0, 3, 3))
         jac = _reachable_jacobians(
-            poses,
-            rot,
-            np.ascontiguousarray(self.base),
-            np.ascontiguousarray(self.platform),
-            np.ascontiguousarray(self.base_axes),
-            np.ascontiguousarray(self.platform_axes),
-            self.q_min,
-            self.q_max,
+            *self._kernel_arguments(poses),
             math.radians(self.cone_base),
             math.radians(self.cone_platform),
             self.angular_scale(length),
@@ -924,6 +917,26 @@ def _rotation_and_rate_map(a, b, torsion, rot, rate):
         rate[r, 2] = t2
 
 
+@kernels.inline_jit
+def _leg(rot, pose, base, platform, base_axes, platform_axes, i):
+    """Leg i at the pose (its position ``pose[:3]``, mm) and rotation ``rot``: the arm ``R p_i``
+    (mm), the leg's length ``q_i`` (:meth:`GoughStewart._inverse`) and unit vector, and the
+    cosines of its cone angles at the base and the platform joint
+    (:meth:`GoughStewart.cone_angles`); the same operations as the numpy methods."""
+    ax = rot[0, 0] * platform[i, 0] + rot[0, 1] * platform[i, 1] + rot[0, 2] * platform[i, 2]
+    ay = rot[1, 0] * platform[i, 0] + rot[1, 1] * platform[i, 1] + rot[1, 2] * platform[i, 2]
+    az = rot[2, 0] * platform[i, 0] + rot[2, 1] * platform[i, 1] + rot[2, 2] * platform[i, 2]
+    lx, ly, lz = ax + pose[0] - base[i, 0], ay + pose[1] - base[i, 1], az + pose[2] - base[i, 2]
+    length = math.sqrt(lx * lx + ly * ly + lz * lz)
+    inverse = 1.0 / length if length > 0.0 else 0.0
+    ux, uy, uz = lx * inverse, ly * inverse, lz * inverse
+    cos_base = ux * base_axes[i, 0] + uy * base_axes[i, 1] + uz * base_axes[i, 2]
+    mx = rot[0, 0] * platform_axes[i, 0] + rot[0, 1] * platform_axes[i, 1] + rot[0, 2] * platform_axes[i, 2]
+    my = rot[1, 0] * platform_axes[i, 0] + rot[1, 1] * platform_axes[i, 1] + rot[1, 2] * platform_axes[i, 2]
+    mz = rot[2, 0] * platform_axes[i, 0] + rot[2, 1] * platform_axes[i, 1] + rot[2, 2] * platform_axes[i, 2]
+    return ax, ay, az, length, ux, uy, uz, cos_base, ux * mx + uy * my + uz * mz
+
+
 @kernels.jit
 def _reachable_jacobians(
     poses, one_rotation, base, platform, base_axes, platform_axes, q_min, q_max, cone_base, cone_platform, column_scale
@@ -949,20 +962,12 @@ def _reachable_jacobians(
             _rotation_and_rate_map(poses[p, 3], poses[p, 4], poses[p, 5], rot, rate)
         ok = True
         for i in range(6):
-            ax = rot[0, 0] * platform[i, 0] + rot[0, 1] * platform[i, 1] + rot[0, 2] * platform[i, 2]
-            ay = rot[1, 0] * platform[i, 0] + rot[1, 1] * platform[i, 1] + rot[1, 2] * platform[i, 2]
-            az = rot[2, 0] * platform[i, 0] + rot[2, 1] * platform[i, 1] + rot[2, 2] * platform[i, 2]
-            lx, ly, lz = ax + poses[p, 0] - base[i, 0], ay + poses[p, 1] - base[i, 1], az + poses[p, 2] - base[i, 2]
-            length = math.sqrt(lx * lx + ly * ly + lz * lz)
+            ax, ay, az, length, ux, uy, uz, cos_base, cos_plat = _leg(
+                rot, poses[p], base, platform, base_axes, platform_axes, i
+            )
             if not (q_min <= length <= q_max):
                 ok = False
                 break
-            ux, uy, uz = lx / length, ly / length, lz / length
-            cos_base = ux * base_axes[i, 0] + uy * base_axes[i, 1] + uz * base_axes[i, 2]
-            mx = rot[0, 0] * platform_axes[i, 0] + rot[0, 1] * platform_axes[i, 1] + rot[0, 2] * platform_axes[i, 2]
-            my = rot[1, 0] * platform_axes[i, 0] + rot[1, 1] * platform_axes[i, 1] + rot[1, 2] * platform_axes[i, 2]
-            mz = rot[2, 0] * platform_axes[i, 0] + rot[2, 1] * platform_axes[i, 1] + rot[2, 2] * platform_axes[i, 2]
-            cos_plat = ux * mx + uy * my + uz * mz
             if not (
                 math.acos(min(max(cos_base, -1.0), 1.0)) <= cone_base
                 and math.acos(min(max(cos_plat, -1.0), 1.0)) <= cone_platform
@@ -994,17 +999,11 @@ def _margins(poses, one_rotation, base, platform, base_axes, platform_axes, q_mi
         if one_rotation.shape[0] != 3:
             _rotation_and_rate_map(poses[p, 3], poses[p, 4], poses[p, 5], rot, rate)
         for i in range(6):
-            ax = rot[0, 0] * platform[i, 0] + rot[0, 1] * platform[i, 1] + rot[0, 2] * platform[i, 2]
-            ay = rot[1, 0] * platform[i, 0] + rot[1, 1] * platform[i, 1] + rot[1, 2] * platform[i, 2]
-            az = rot[2, 0] * platform[i, 0] + rot[2, 1] * platform[i, 1] + rot[2, 2] * platform[i, 2]
-            lx, ly, lz = ax + poses[p, 0] - base[i, 0], ay + poses[p, 1] - base[i, 1], az + poses[p, 2] - base[i, 2]
-            length = math.sqrt(lx * lx + ly * ly + lz * lz)
-            ux, uy, uz = lx / length, ly / length, lz / length
-            mx = rot[0, 0] * platform_axes[i, 0] + rot[0, 1] * platform_axes[i, 1] + rot[0, 2] * platform_axes[i, 2]
-            my = rot[1, 0] * platform_axes[i, 0] + rot[1, 1] * platform_axes[i, 1] + rot[1, 2] * platform_axes[i, 2]
-            mz = rot[2, 0] * platform_axes[i, 0] + rot[2, 1] * platform_axes[i, 1] + rot[2, 2] * platform_axes[i, 2]
+            _, _, _, length, _, _, _, base_joint, platform_joint = _leg(
+                rot, poses[p], base, platform, base_axes, platform_axes, i
+            )
             out[p, i] = length - q_min
             out[p, 6 + i] = q_max - length
-            out[p, 12 + i] = ux * base_axes[i, 0] + uy * base_axes[i, 1] + uz * base_axes[i, 2] - cos_base
-            out[p, 18 + i] = ux * mx + uy * my + uz * mz - cos_platform
+            out[p, 12 + i] = base_joint - cos_base
+            out[p, 18 + i] = platform_joint - cos_platform
     return out

@@ -271,6 +271,20 @@ class H4(Mechanism):
         reachable = row_all(np.isfinite(drop))
         return 2, np.where(reachable, lower, np.inf), np.where(reachable, upper, -np.inf)
 
+    def _joint_reach(self) -> np.ndarray:
+        """Largest horizontal reach ``M_i sin(limit)`` (cm, (4,)) of each rod within the ball-joint
+        limit (:meth:`within_joint_limits`); +inf without a limit."""
+        if self.ball_joint_limit is None:
+            return np.full(4, np.inf)
+        return self.M * np.sin(np.radians(self.ball_joint_limit))
+
+    def _column_arguments(self, poses: np.ndarray, axis_lo: float, axis_hi: float) -> tuple:
+        """The leading arguments of the column kernels (:func:`_h4_columns`, :func:`_h4_margins`):
+        the poses, the cosines and sines of their theta, the geometry (cm) and the z box."""
+        cos_theta, sin_theta = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 3]))
+        geometry = (self.a, self.b, self.P, self.Q, self.M, self.stroke)
+        return (np.ascontiguousarray(poses), cos_theta, sin_theta, *geometry, float(axis_lo), float(axis_hi))
+
     def exact_axis_margins(self, poses: np.ndarray, axis_lo: float, axis_hi: float) -> np.ndarray:
         """Margins of an (x, y, theta) column (N, 28): its feasible z interval of eq. 11,
         ``max_j(-s_j) <= z <= min_i(stroke - s_i)`` clipped to ``[axis_lo, axis_hi]``
@@ -282,26 +296,9 @@ class H4(Mechanism):
         where a radicand is negative its root ``s_i`` is continued as ``-sqrt(-radicand)``, so
         the bounds stay continuous across the reach boundary."""
         poses = self._check_poses(poses)
-        if self.ball_joint_limit is None:
-            reach = np.full(4, np.inf)
-        else:
-            reach = self.M * np.sin(np.radians(self.ball_joint_limit))
+        reach = self._joint_reach()
         if kernels.compiled():
-            cos_theta, sin_theta = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 3]))
-            return _h4_margins(
-                np.ascontiguousarray(poses),
-                cos_theta,
-                sin_theta,
-                self.a,
-                self.b,
-                self.P,
-                self.Q,
-                self.M,
-                self.stroke,
-                float(axis_lo),
-                float(axis_hi),
-                reach,
-            )
+            return _h4_margins(*self._column_arguments(poses, axis_lo, axis_hi), reach)
         dx, dy, _, _ = self._horizontal(poses)
         radicand = self.M**2 - dx**2 - dy**2
         drop = np.sign(radicand) * np.sqrt(np.abs(radicand))
@@ -326,25 +323,8 @@ class H4(Mechanism):
         if not kernels.compiled():
             return None
         poses = self._check_poses(poses)
-        if self.ball_joint_limit is None:
-            reach = np.full(4, np.inf)
-        else:
-            reach = self.M * np.sin(np.radians(self.ball_joint_limit))
-        cos_theta, sin_theta = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 3]))
         lower, upper, jac, rows = _h4_columns(
-            np.ascontiguousarray(poses),
-            cos_theta,
-            sin_theta,
-            self.a,
-            self.b,
-            self.P,
-            self.Q,
-            self.M,
-            self.stroke,
-            float(axis_lo),
-            float(axis_hi),
-            self.angular_scale(length),
-            reach,
+            *self._column_arguments(poses, axis_lo, axis_hi), self.angular_scale(length), self._joint_reach()
         )
         ic = np.full(poses.shape[0], np.nan)
         ic[rows] = kernels.inverse_condition_batch(jac, np.ones(4))
@@ -373,7 +353,7 @@ class H4(Mechanism):
             return np.ones(poses.shape[0], dtype=bool)
         dx, dy, _, _ = self._horizontal(poses)
         horizontal = np.hypot(dx, dy)  # |L_i| sin(angle) = horizontal reach
-        return row_all(horizontal <= self.M * np.sin(np.radians(self.ball_joint_limit)))
+        return row_all(horizontal <= self._joint_reach())
 
     def base_points(self, q: np.ndarray) -> np.ndarray:
         """Carriage points ``A_i = (a_i, b_i, q_i)`` (eq. 13), shape (N, 4, 3), cm."""

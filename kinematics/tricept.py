@@ -488,6 +488,40 @@ def _within_cone(cosine, cone, cone_cosine):
     return math.acos(min(max(cosine, -1.0), 1.0)) <= cone
 
 
+@kernels.inline_jit
+def _tricept_rotation(rot, cp, sp, ct, st):
+    """``R = R_y(theta) R_x(psi)`` (eq. 1) into ``rot`` (3, 3), from the cosines and sines."""
+    rot[0, 0], rot[0, 1], rot[0, 2] = ct, sp * st, cp * st
+    rot[1, 0], rot[1, 1], rot[1, 2] = 0.0, cp, -sp
+    rot[2, 0], rot[2, 1], rot[2, 2] = -st, ct * sp, ct * cp
+
+
+@kernels.inline_jit
+def _tricept_leg(rot, platform, base, home_axes, home_reference, c, i):
+    """Leg i at rotation ``rot`` and elevation ``c`` (mm): the arm ``R p_i`` (mm), the leg's length
+    ``q_i`` (eq. 1-5) and unit vector, and the cosines of its base and platform cone angles
+    (:meth:`Tricept.cone_angles`, the normals or the home leg axes): the same operations as the
+    numpy methods."""
+    ax = rot[0, 0] * platform[i, 0] + rot[0, 1] * platform[i, 1] + rot[0, 2] * platform[i, 2]
+    ay = rot[1, 0] * platform[i, 0] + rot[1, 1] * platform[i, 1] + rot[1, 2] * platform[i, 2]
+    az = rot[2, 0] * platform[i, 0] + rot[2, 1] * platform[i, 1] + rot[2, 2] * platform[i, 2]
+    lx, ly, lz = ax - base[i, 0], ay - base[i, 1], az - base[i, 2] + c
+    q = math.sqrt(lx * lx + ly * ly + lz * lz)
+    inverse = 1.0 / q if q > 0.0 else 0.0
+    nx, ny, nz = lx * inverse, ly * inverse, lz * inverse
+    if home_reference:
+        hx, hy, hz = home_axes[i, 0], home_axes[i, 1], home_axes[i, 2]
+        base_cos = nx * hx + ny * hy + nz * hz
+        mx = rot[0, 0] * hx + rot[0, 1] * hy + rot[0, 2] * hz
+        my = rot[1, 0] * hx + rot[1, 1] * hy + rot[1, 2] * hz
+        mz = rot[2, 0] * hx + rot[2, 1] * hy + rot[2, 2] * hz
+        platform_cos = nx * mx + ny * my + nz * mz
+    else:
+        base_cos = nz
+        platform_cos = nx * rot[0, 2] + ny * rot[1, 2] + nz * rot[2, 2]
+    return ax, ay, az, q, nx, ny, nz, base_cos, platform_cos
+
+
 @kernels.jit
 def _tricept_reachable_jacobians(
     poses,
@@ -519,37 +553,22 @@ def _tricept_reachable_jacobians(
     count = poses.shape[0]
     out = np.empty((count, 3, 3))
     rot = np.empty((3, 3))
-    arm = np.empty(3)
     base_cone_cos, platform_cone_cos = _cone_cosine(base_cone), _cone_cosine(platform_cone)
     tilt_cos = _cone_cosine(tilt_limit)
     for p in range(count):
         c = poses[p, 0]
         cp, sp, ct, st = cos_psi[p], sin_psi[p], cos_theta[p], sin_theta[p]
         ok = _within_cone(cp * ct, tilt_limit, tilt_cos)  # the central joint's tilt
-        rot[0, 0], rot[0, 1], rot[0, 2] = ct, sp * st, cp * st
-        rot[1, 0], rot[1, 1], rot[1, 2] = 0.0, cp, -sp
-        rot[2, 0], rot[2, 1], rot[2, 2] = -st, ct * sp, ct * cp
+        _tricept_rotation(rot, cp, sp, ct, st)
         for i in range(3):
             if not ok:
                 break
-            for k in range(3):
-                arm[k] = rot[k, 0] * platform[i, 0] + rot[k, 1] * platform[i, 1] + rot[k, 2] * platform[i, 2]
-            lx, ly, lz = arm[0] - base[i, 0], arm[1] - base[i, 1], arm[2] - base[i, 2] + c
-            q = math.sqrt(lx * lx + ly * ly + lz * lz)
+            ax, ay, az, q, nx, ny, nz, base_cos, platform_cos = _tricept_leg(
+                rot, platform, base, home_axes, home_reference, c, i
+            )
             if not (q_min <= q <= q_max):
                 ok = False
                 break
-            nx, ny, nz = lx / q, ly / q, lz / q
-            if home_reference:
-                hx, hy, hz = home_axes[i, 0], home_axes[i, 1], home_axes[i, 2]
-                base_cos = nx * hx + ny * hy + nz * hz
-                mx = rot[0, 0] * hx + rot[0, 1] * hy + rot[0, 2] * hz
-                my = rot[1, 0] * hx + rot[1, 1] * hy + rot[1, 2] * hz
-                mz = rot[2, 0] * hx + rot[2, 1] * hy + rot[2, 2] * hz
-                platform_cos = nx * mx + ny * my + nz * mz
-            else:
-                base_cos = nz
-                platform_cos = nx * rot[0, 2] + ny * rot[1, 2] + nz * rot[2, 2]
             if not (
                 _within_cone(base_cos, base_cone, base_cone_cos)
                 and _within_cone(platform_cos, platform_cone, platform_cone_cos)
@@ -557,9 +576,9 @@ def _tricept_reachable_jacobians(
                 ok = False
                 break
             # moment r x n of eq. 31
-            mom_x = arm[1] * nz - arm[2] * ny
-            mom_y = arm[2] * nx - arm[0] * nz
-            mom_z = arm[0] * ny - arm[1] * nx
+            mom_x = ay * nz - az * ny
+            mom_y = az * nx - ax * nz
+            mom_z = ax * ny - ay * nx
             out[p, i, 0] = nz * column_scale[0]
             out[p, i, 1] = (mom_x * ct - mom_z * st) * column_scale[1]
             out[p, i, 2] = mom_y * column_scale[2]
@@ -596,28 +615,13 @@ def _tricept_margins(
     for p in range(count):
         c = poses[p, 0]
         cp, sp, ct, st = cos_psi[p], sin_psi[p], cos_theta[p], sin_theta[p]
-        rot[0, 0], rot[0, 1], rot[0, 2] = ct, sp * st, cp * st
-        rot[1, 0], rot[1, 1], rot[1, 2] = 0.0, cp, -sp
-        rot[2, 0], rot[2, 1], rot[2, 2] = -st, ct * sp, ct * cp
+        _tricept_rotation(rot, cp, sp, ct, st)
         for i in range(3):
-            ax = rot[0, 0] * platform[i, 0] + rot[0, 1] * platform[i, 1] + rot[0, 2] * platform[i, 2]
-            ay = rot[1, 0] * platform[i, 0] + rot[1, 1] * platform[i, 1] + rot[1, 2] * platform[i, 2]
-            az = rot[2, 0] * platform[i, 0] + rot[2, 1] * platform[i, 1] + rot[2, 2] * platform[i, 2]
-            lx, ly, lz = ax - base[i, 0], ay - base[i, 1], az - base[i, 2] + c
-            q = math.sqrt(lx * lx + ly * ly + lz * lz)
+            _, _, _, q, _, _, _, base_cos, platform_cos = _tricept_leg(
+                rot, platform, base, home_axes, home_reference, c, i
+            )
             out[p, i] = q - q_min
             out[p, 3 + i] = q_max - q
-            nx, ny, nz = lx / q, ly / q, lz / q
-            if home_reference:
-                hx, hy, hz = home_axes[i, 0], home_axes[i, 1], home_axes[i, 2]
-                base_cos = nx * hx + ny * hy + nz * hz
-                mx = rot[0, 0] * hx + rot[0, 1] * hy + rot[0, 2] * hz
-                my = rot[1, 0] * hx + rot[1, 1] * hy + rot[1, 2] * hz
-                mz = rot[2, 0] * hx + rot[2, 1] * hy + rot[2, 2] * hz
-                platform_cos = nx * mx + ny * my + nz * mz
-            else:
-                base_cos = nz
-                platform_cos = nx * rot[0, 2] + ny * rot[1, 2] + nz * rot[2, 2]
             k = 6
             if base_limited:
                 out[p, k + i] = base_cos - cone_cos
