@@ -1,6 +1,7 @@
 """The recommended optimiser on seeds 0-9 of every benchmark problem, against the best known optimum.
 
-``python -m benchmarks.optimiser_seeds [--seeds N] [--no-ga]`` reads the golden best-known
+``python -m benchmarks.optimiser_seeds [--seeds N] [--no-ga]`` writes
+``docs/benchmarks_optimiser_seeds.md`` (``--page PATH`` elsewhere). It reads the golden best-known
 optima (``benchmarks/best_known.json``, written by ``python -m benchmarks.best_known``; refused
 when a recorded design no longer evaluates to its value) and prints, per problem (built as the pipeline
 builds it: default resolution and readings):
@@ -23,7 +24,10 @@ beats the golden value becomes the best known (written back to ``best_known.json
 from __future__ import annotations
 
 import argparse
+import os
 import time
+from datetime import date
+from pathlib import Path
 
 import numpy as np
 
@@ -35,6 +39,26 @@ from pipeline.stages.optimise import reference_columns
 
 TOLERANCE = 1e-3
 MAX_EVALUATIONS = 1000
+PAGE = Path(__file__).resolve().parent.parent / "docs" / "benchmarks_optimiser_seeds.md"
+
+
+def header(golden: dict) -> str:
+    """The page's first lines: when and how it was measured, what the reference is."""
+    methods = sorted({record.get("method", "midpoint") for record in golden.values()})
+    return (
+        "# benchmarks/optimiser_seeds.py output\n\n"
+        f"Measured {date.today().isoformat()} on the project's {os.cpu_count()}-core machine (load average "
+        f"{', '.join(f'{x:.2f}' for x in os.getloadavg())} at the end: wall times are not speed figures).\n"
+        "Best-known optima: `benchmarks/best_known.json` (`python -m benchmarks.best_known`: CMA-ES seeds 0-3,\n"
+        "DE 20 x 60 and a 9-point-per-variable grid, each polished; a run of `benchmarks.optimisers` (GA, DE 30 x\n"
+        "150, CMA-ES seeds 0-2) or a seed of the table below that beats it becomes the best known, its `found_by`\n"
+        f"naming the run). Objective: the pipeline's default workspace integration, `evaluate.method` "
+        f"{' / '.join(methods)} (the boundary-fraction grid of docs/accuracy.md); every golden design "
+        "re-evaluates to its\nrecorded value on it (the check `benchmarks.best_known.load` makes before a table is "
+        "measured).\nThe error of a best known optimum is its change at 4x the default resolution.\n"
+        "Regenerate: `python -m benchmarks.best_known && python -m benchmarks.optimisers && "
+        "python -m benchmarks.optimiser_seeds`.\n"
+    )
 
 
 def main() -> None:
@@ -42,6 +66,7 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1 (default 10)")
     parser.add_argument("--no-ga", action="store_true", help="skip the paper GA's row")
     parser.add_argument("--problem", choices=sorted(PROBLEMS), action="append", help="only these (default: all)")
+    parser.add_argument("--page", type=Path, default=PAGE, help="the page written (default docs/...)")
     args = parser.parse_args()
     names = args.problem or list(PROBLEMS)
     golden = load(names)
@@ -95,19 +120,23 @@ def main() -> None:
                 f"{'yes' if success else 'NO'} | {', '.join(f'{v:.6g}' for v in x)} |"
             )
         print(f"{name}: {ok.sum()}/{len(runs)}", flush=True)
-    print(f"\n## Recommended optimiser (cmaes + polish) on seeds 0-{args.seeds - 1} against the best known\n")
-    print(
-        "Success: gap <= max(0.1 %, the best known's estimated error) within "
-        f"{MAX_EVALUATIONS} evaluations. GA: the paper's GA (30 x 150, seed 0) against the best known.\n"
+    page = "\n".join(
+        [
+            header(golden),
+            f"## Recommended optimiser (cmaes + polish) on seeds 0-{args.seeds - 1} against the best known\n",
+            "Success: gap <= max(0.1 %, the best known's estimated error) within "
+            f"{MAX_EVALUATIONS} evaluations. GA: the paper's GA (30 x 150, seed 0) against the best known.\n",
+            "| problem | best known | design | found by | its error | tolerance | cmaes successes | "
+            "median evaluations | worst evaluations | worst gap | paper GA (seed 0) gap |",
+            "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+            *summary,
+            "\n## Per seed",
+            *details,
+        ]
     )
-    print(
-        "| problem | best known | design | found by | its error | tolerance | cmaes successes | "
-        "median evaluations | worst evaluations | worst gap | paper GA (seed 0) gap |"
-    )
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
-    print("\n".join(summary))
-    print("\n## Per seed")
-    print("\n".join(details))
+    print(page)
+    if args.problem is None and args.seeds == 10:  # a partial run leaves the page as it is
+        args.page.write_text(page + "\n")
 
 
 if __name__ == "__main__":
