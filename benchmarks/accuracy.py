@@ -5,8 +5,8 @@ Run: ``python -m benchmarks.accuracy`` (about two minutes on 2 cores).
 
 For each mechanism, designs are the test suite's paper design, two random designs of the
 design box (seeded) and, where documented, an optimum of docs/reproduction.md. The reference
-of each design is the new method at :data:`REFERENCE_FACTOR` x the default resolution,
-cross-checked against the old method at the same resolution (printed). Each method is timed
+of each design is the new method at :data:`REFERENCE_FACTOR` x the finer of the two methods'
+default resolutions, cross-checked against the old method at the same resolution (printed). Each method is timed
 at a ladder of resolutions in the same run (best of :data:`REPEATS`, one core), so the cost
 ratios are side by side. The error of a method at a resolution is the largest relative error
 over the designs of V, GDI and eta (w_d = 0.5).
@@ -130,7 +130,7 @@ guarantee of 0.1 % on every design. The 3-RPR's sections converge like h^1.5 acr
 (where a section shrinks to nothing, its length falls like a square root).
 
 **Independent references.** The reference of each design below is the same method at
-4x the resolution (cross-checked against the old method there). Where the exact value is
+4x the finer of the two defaults (cross-checked against the old method there). Where the exact value is
 known independently of any grid, the tests hold the default to it: the 2-RPR's area
 (`RPR2.exact_area`, two annuli in closed form) on six random designs within 0.1 %
 (`tests/test_accuracy.py`; the old count errs by up to 0.27 % on them), and the 3-RPR's
@@ -201,15 +201,16 @@ def quantities(ev) -> np.ndarray:
 
 def study(name: str) -> dict:
     cases = designs(name)
-    r0 = default_resolution(cases[0][1])
+    # each method's ladder around its own default (the grid method's node budget may differ)
+    r_default = {method: default_resolution(cases[0][1], method=method) for method in ("midpoint", "grid")}
+    # the reference: REFERENCE_FACTOR x the finer of the two defaults
+    r0 = max(r_default.values())
     refs, cross = [], []
     for _, mech in cases:
         ref = evaluate(mech, resolution=REFERENCE_FACTOR * r0, method="grid", error_estimate=False)
         old_ref = evaluate(mech, resolution=REFERENCE_FACTOR * r0, method="midpoint", error_estimate=False)
         refs.append(quantities(ref))
         cross.append(np.abs(quantities(old_ref) / quantities(ref) - 1))
-    # each method's ladder around its own default (the grid method's node budget may differ)
-    r_default = {method: default_resolution(cases[0][1], method=method) for method in ("midpoint", "grid")}
     rows = []
     for factor in LADDER:
         res = {method: max(int(round(factor * r)), 2) for method, r in r_default.items()}
@@ -264,6 +265,7 @@ def study(name: str) -> dict:
     return dict(
         name=name,
         r0=r0,
+        r_old=r_default["midpoint"],
         r_grid=r_default["grid"],
         cases=[c[0] for c in cases],
         rows=rows,
@@ -356,7 +358,7 @@ def figure(results: list[dict]) -> None:
                     ax.annotate("default", (c, e), textcoords="offset points", xytext=(4, 4), fontsize=7)
         ax.axhline(0.1, color="grey", lw=0.8, ls=":")
         ax.xaxis.set_minor_formatter(NullFormatter())  # a narrow decade would label its minor ticks
-        ax.set_title(f"{r['name']} (defaults: old {r['r0']}, new {r['r_grid']})")
+        ax.set_title(f"{r['name']} (defaults: old {r['r_old']}, new {r['r_grid']})")
         ax.set_xlabel("CPU ms per evaluation (one core)")
         ax.grid(True, which="both", lw=0.3)
     for ax in axes[::columns]:
@@ -373,7 +375,7 @@ def main() -> None:
         r = study(name)
         results.append(r)
         print(
-            f"{name}: designs {', '.join(r['cases'])}; reference {REFERENCE_FACTOR}x default, "
+            f"{name}: designs {', '.join(r['cases'])}; reference at resolution {REFERENCE_FACTOR * r['r0']}, "
             f"old vs new there: V {100 * r['cross'][0]:.3f} %, GDI {100 * r['cross'][1]:.3f} %",
             flush=True,
         )
