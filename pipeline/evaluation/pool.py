@@ -114,6 +114,23 @@ def sigint_deferred() -> Iterator[None]:
             signal.raise_signal(signal.SIGINT)
 
 
+#: the warning loky's resource tracker prints at exit when it removes a semaphore that a pool
+#: interrupted while starting left behind (it cleans up; the message is the only trace)
+_TRACKER_WARNING = "ignore:resource_tracker:UserWarning"
+
+
+def _quiet_resource_tracker() -> None:
+    """Filter :data:`_TRACKER_WARNING` in the processes this one starts (loky's resource tracker
+    is one: it inherits the environment when the first pool starts it).
+
+    Why: a Ctrl-C while the workers start ends the run with its one ``error:`` line; the
+    tracker's leaked-semaphore warning, printed after it from the tracker's own process, would
+    add lines of noise about a semaphore it has just removed."""
+    filters = [f for f in os.environ.get("PYTHONWARNINGS", "").split(",") if f]
+    if _TRACKER_WARNING not in filters:
+        os.environ["PYTHONWARNINGS"] = ",".join([*filters, _TRACKER_WARNING])
+
+
 def start_worker(parent: int, preload: tuple[str, ...]) -> None:
     """Each worker's loky initializer: watch the parent, then import ``preload`` (so that the
     imports, ~1.5 s, overlap the caller's work before its first batch).
@@ -147,6 +164,7 @@ class FitnessPool:
     def __init__(self, n_workers: int, preload: tuple[str, ...] = ()) -> None:
         self.n_workers = n_workers
         self.closed = False
+        _quiet_resource_tracker()
         # no idle timeout: the pool is kept for the run (ended at exit, or at once after Ctrl-C)
         self._executor = ProcessPoolExecutor(
             max_workers=n_workers,
