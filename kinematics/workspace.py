@@ -25,7 +25,7 @@ with ``resolution`` nodes per sampled axis over the part of the box the
 workspace occupies (found on a grid of half the resolution), each node owning
 its cell. A cell that the workspace boundary cuts counts with the fraction of
 it inside: the boundary crossings on the grid edges next to the node are
-located on the workspace's margins (:func:`_bisect`: the mechanism's
+located on the workspace's margins (:func:`_crossings`: the mechanism's
 reachability margins, :meth:`~kinematics.base.Mechanism.constraint_margins`, and
 ``1/kappa^2`` against the dexterity limit, each interpolated through three points
 of the edge; a mechanism without margins is bisected), the boundary is taken as the plane through the nearest
@@ -351,7 +351,7 @@ class _PointValues:
         self.orientation, self.min_ic, self.length = orientation, min_ic, length
         self.count = 0  # poses evaluated (the cost of an evaluation)
         # every pose of the box lies in the orientation range (the box spans at most that range):
-        # the poses this class sees (grid nodes, bisection points between nodes and faces) need
+        # the poses this class sees (grid nodes, points between nodes and faces) need
         # no orientation test
         angular = np.asarray(mechanism.angular, dtype=bool)
         self.box_oriented = bool(
@@ -414,14 +414,15 @@ class _PointValues:
         return inside, weight, ic, extent
 
 
-#: bisection steps per boundary crossing of a grid edge (``method="grid"``): the crossing is
-#: located to ``h / 2**(BISECTIONS + 1)`` (h the grid step), well below the discretisation error
+#: bisection steps per boundary crossing of a grid edge where the margins cannot place it
+#: (``method="grid"``, a mechanism without margins): the crossing is located to
+#: ``h / 2**(BISECTIONS + 1)`` (h the grid step), well below the discretisation error
 BISECTIONS = 4
 #: largest ``h / distance`` of a crossing (a crossing on a node: the plane through the node)
 _MAX_SLOPE = 1e4
 
 
-def _bisect(
+def _crossings(
     values: _PointValues,
     probe: np.ndarray,
     column: np.ndarray,
@@ -521,7 +522,7 @@ def _stacked(reach: np.ndarray, dex: np.ndarray) -> np.ndarray:
 
 
 def _linear_crossing(reach: np.ndarray, dex_in: np.ndarray, dex_out: np.ndarray) -> np.ndarray:
-    """Step 1 of :func:`_bisect`: per row the first sign change of the margins linear between
+    """Step 1 of :func:`_crossings`: per row the first sign change of the margins linear between
     the inside and the outside end, as a fraction of the way in [0, 1]. ``reach`` (2N, K):
     the reachability margins at the N inside ends, then at the N outside ends; ``dex_in``,
     ``dex_out`` (N,): the dexterity margin there (NaN where unknown). NaN where the margins
@@ -549,7 +550,7 @@ def _refined_crossing(
     rows: np.ndarray,
     tm: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Step 2 of :func:`_bisect` on the ``rows`` (M,) of :func:`_linear_crossing`'s arrays, with
+    """Step 2 of :func:`_crossings` on the ``rows`` (M,) of :func:`_linear_crossing`'s arrays, with
     the margins ``reach_mid`` (M, K), ``dex_mid`` (M,) at ``tm`` (M,), the fraction of step 1:
     the first root in [0, 1] of each margin as the parabola through its three values (the line
     through the first two where the outside end's is unknown). Returns the root (``tm`` where
@@ -668,7 +669,7 @@ def _bisect_membership(
     start: np.ndarray,
     steps: int,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_bisect` by bisection of the membership test (see there)."""
+    """:func:`_crossings` by bisection of the membership test (see there)."""
     rows = np.arange(probe.shape[0])
     value = start
     ic_in = np.full(rows.size, np.nan)
@@ -706,7 +707,7 @@ def _edge_crossings(
     end node to the box face (the face is evaluated where the end node is
     inside: a workspace that fills the box up to the face has no crossing
     there). On each edge whose ends differ in membership the crossing is placed
-    by :func:`_bisect` (every axis in the same calls). ``f`` are integrands (node
+    by :func:`_crossings` (every axis in the same calls). ``f`` are integrands (node
     arrays, 0 outside) whose values at the crossings are reported; ``ic``: the
     nodes' ``1/kappa`` (NaN where unreachable), for dexterity crossings.
 
@@ -780,7 +781,7 @@ def _edge_crossings(
             )
         )
     sizes = [b[1].size for b in brackets]
-    crossing, value = _bisect(
+    crossing, value = _crossings(
         values,
         np.vstack([b[5] for b in brackets]),
         np.repeat(sampled, sizes),
@@ -1138,8 +1139,8 @@ def _boundary_corrected_sums_compiled(
     """:func:`_boundary_corrected_sums` with sparse bookkeeping: the grid edges whose ends
     differ in membership are found slab by slab (vectorised comparisons of neighbouring layers),
     only the inside end nodes' faces are evaluated, and the cut cells are summed compiled
-    (:func:`_cut_cell_corrections`) over the nodes next to a crossing only; the poses are
-    evaluated in one call per bisection step, as in the numpy path."""
+    (:func:`_cut_cell_corrections`) over the nodes next to a crossing only; the crossings are
+    placed by :func:`_crossings` (all edges in one call per step), as in the numpy path."""
     shape = inside.shape
     flat_inside = np.ascontiguousarray(inside.ravel())
     f0, f1 = np.ascontiguousarray(f0.ravel()), np.ascontiguousarray(f1.ravel())
@@ -1199,7 +1200,7 @@ def _boundary_corrected_sums_compiled(
     p_in = positions[axis, coordinate + 1]
     # the outside end: the neighbouring node, or the face past the end node
     p_out = positions[axis, np.where(left_in, coordinate + 2, coordinate)]
-    crossing, value = _bisect(
+    crossing, value = _crossings(
         values,
         poses_of(inner_node, axis, p_in),
         column[axis],
@@ -1295,7 +1296,7 @@ def _occupied_box(
     wherever on it the crossing lies) and clipped to the box; a workspace in the first or
     last layer keeps that face. Each crossing moves continuously with the design, and so
     does their minimum: the grid, and the integral, stay continuous. The crossings are
-    placed on the margins (:func:`_bisect`); where the mechanism has none the few extreme
+    placed on the margins (:func:`_crossings`); where the mechanism has none the few extreme
     edges are cut in :data:`SECTIONS` parts ``rounds`` times (:func:`_multisect`, one call
     per round), so that the box moves by no more than ``SECTIONS**-rounds`` (``2**-12``) of a
     coarse cell at a time. An empty coarse grid keeps the box.
@@ -1333,7 +1334,7 @@ def _occupied_box(
         p_in, p_out = np.concatenate([job[3] for job in jobs]), np.concatenate([job[4] for job in jobs])
         # on the margins where the mechanism has them (any crossing of the edge will do: the box
         # is widened by the edge's length), by multisection elsewhere
-        crossing, _ = _bisect(values, probe.copy(), column, p_in, p_out, np.empty((0, p_in.size)), None)
+        crossing, _ = _crossings(values, probe.copy(), column, p_in, p_out, np.empty((0, p_in.size)), None)
         left = np.nonzero(np.isnan(crossing))[0]
         if left.size:
             crossing[left] = _multisect(values, probe[left], column[left], p_in[left], p_out[left], rounds)
@@ -1365,14 +1366,15 @@ def _integrate_grid(
     ``refine=True`` (``method="grid"``): the grid spans the workspace's extent
     (:func:`_occupied_box`), and each cell counts with the fraction of it inside
     the workspace. On every grid edge (and half edge to the box face) whose ends
-    differ in membership the boundary crossing is located by bisection
-    (:func:`_edge_crossings`); a node next to crossings takes the boundary as the
+    differ in membership the boundary crossing is placed on the margins
+    (:func:`_crossings`; :func:`_edge_crossings`); a node next to crossings takes the boundary as the
     plane through the nearest crossing along each axis and counts the part of its
     cell on the workspace's side (:func:`_cube_fraction`), with the integrand at
     that part's centroid (:func:`_boundary_corrected_sums`). Exact for a planar
     boundary, second order for a smooth one, and continuous in the design: when
     the boundary crosses a node the plane passes through the node and the
-    fraction is 1/2 from either side. ``steps``: bisections per crossing.
+    fraction is 1/2 from either side. ``steps``: bisections per crossing the margins
+    cannot place.
     """
     exact = _exact_axis(mechanism, fixed)
     box = mechanism.pose_bounds(orientation)
