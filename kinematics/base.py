@@ -333,7 +333,8 @@ class Mechanism(ABC):
         """
         return None
 
-    #: the pose variable along which :meth:`exact_sections` integrates in closed form, if any
+    #: the pose variable along which :meth:`exact_sections` integrates in closed form, if any; a
+    #: class that sets it implements :meth:`exact_sections` (``evaluate(method="grid")`` then uses it)
     section_axis: ClassVar[int | None] = None
 
     def exact_sections(
@@ -347,7 +348,8 @@ class Mechanism(ABC):
         of ``1/kappa`` over its samples and the number of Jacobians evaluated; ``1/kappa`` is
         sampled at the intervals' ends and at the nodes ``origin + k step``. Used by
         ``workspace.evaluate(method="grid")`` in place of the cut-cell grid (3-RPR:
-        :meth:`kinematics.rpr3.RPR3.exact_sections`). ``None`` (the default): no such sections.
+        :meth:`kinematics.rpr3.RPR3.exact_sections`). ``None`` (the default, with
+        :attr:`section_axis` None): no such sections.
         """
         return None
 

@@ -309,6 +309,24 @@ class Tricept(Mechanism):
             plat = np.arccos(np.clip(np.einsum("nki,nki->nk", unit, moved), -1.0, 1.0))
         return base, plat
 
+    def _kernel_arguments(self, poses: np.ndarray) -> tuple:
+        """The leading arguments of the compiled leg kernels (:func:`_tricept_reachable_jacobians`,
+        :func:`_tricept_margins`): the poses, the cosines and sines of psi and theta, the
+        platform and base joints and the home leg axes (mm), the leg range (mm)."""
+        cos_psi, sin_psi = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 1]))
+        cos_theta, sin_theta = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 2]))
+        joints = (self.p, self.base, self._home_axes)
+        return (
+            np.ascontiguousarray(poses),
+            cos_psi,
+            sin_psi,
+            cos_theta,
+            sin_theta,
+            *(np.ascontiguousarray(a) for a in joints),
+            self.q_min,
+            self.q_max,
+        )
+
     def constraint_margins(self, poses: np.ndarray) -> np.ndarray:
         """Margins of the actuator range and :meth:`within_joint_limits` (N, K): ``q_i - q_min``,
         ``q_max - q_i`` (mm, eq. 1-5), ``cos(angle) - cos(cone)`` of each limited joint's cone
@@ -317,19 +335,8 @@ class Tricept(Mechanism):
         are computed once (this runs on every grid edge the workspace boundary crosses)."""
         poses = self._check_poses(poses)
         if kernels.compiled():
-            cos_psi, sin_psi = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 1]))
-            cos_theta, sin_theta = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 2]))
             return _tricept_margins(
-                np.ascontiguousarray(poses),
-                cos_psi,
-                sin_psi,
-                cos_theta,
-                sin_theta,
-                np.ascontiguousarray(self.p),
-                np.ascontiguousarray(self.base),
-                np.ascontiguousarray(self._home_axes),
-                self.q_min,
-                self.q_max,
+                *self._kernel_arguments(poses),
                 math.cos(self.cone_limit),
                 self.cone_joints in ("both", "base"),
                 self.cone_joints in ("both", "platform"),
@@ -389,19 +396,8 @@ class Tricept(Mechanism):
         ``J``, compiled (see :func:`_tricept_reachable_jacobians`)."""
         cone = self.cone_limit
         tilt = math.radians(self.tilt_limit) if self.tilt_limit is not None else np.inf
-        cos_psi, sin_psi = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 1]))
-        cos_theta, sin_theta = kernels.periodic_cos_sin(np.ascontiguousarray(poses[:, 2]))
         return _tricept_reachable_jacobians(
-            poses,
-            cos_psi,
-            sin_psi,
-            cos_theta,
-            sin_theta,
-            np.ascontiguousarray(self.p),
-            np.ascontiguousarray(self.base),
-            np.ascontiguousarray(self._home_axes),
-            self.q_min,
-            self.q_max,
+            *self._kernel_arguments(poses),
             cone if self.cone_joints in ("both", "base") else np.inf,
             cone if self.cone_joints in ("both", "platform") else np.inf,
             self.cone_reference == "home",

@@ -349,7 +349,6 @@ class _PointValues:
     ):
         self.mechanism, self.exact, self.box = mechanism, exact, box
         self.orientation, self.min_ic, self.length = orientation, min_ic, length
-        self.count = 0  # poses evaluated (the cost of an evaluation)
         # every pose of the box lies in the orientation range (the box spans at most that range):
         # the poses this class sees (grid nodes, points between nodes and faces) need
         # no orientation test
@@ -363,7 +362,6 @@ class _PointValues:
         """The mechanism's reachability margins of ``poses`` (N, K), or None when it has none
         (:meth:`~kinematics.base.Mechanism.constraint_margins`; for an exact axis those of
         the columns, :meth:`~kinematics.base.Mechanism.exact_axis_margins`)."""
-        self.count += poses.shape[0]
         if self.exact is None:
             return self.mechanism.constraint_margins(poses)
         return self.mechanism.exact_axis_margins(poses, self.box[0][self.exact], self.box[1][self.exact])
@@ -374,7 +372,6 @@ class _PointValues:
         """``(inside, weight, ic, extent)`` of ``poses`` (modified in place along the exact
         axis: the middle of the feasible interval, when the numpy path needs a pose there)."""
         mechanism, exact, orientation, min_ic = self.mechanism, self.exact, self.orientation, self.min_ic
-        self.count += poses.shape[0]
         oriented = oriented or self.box_oriented
         box_lo, box_hi = self.box
         fused = None
@@ -488,13 +485,16 @@ def _crossings(
         t1 = first[look]
         at = probe[look].copy()
         at[np.arange(look.size), column[look]] = p_in[look] + t1 * (p_out[look] - p_in[look])
-        inside_1, weight_1, ic_1, _ = values(at)
+        if start.shape[0]:
+            inside_1, weight_1, ic_1, _ = values(at)
+        else:  # no integrands asked for, and no dexterity margin at the inside end to refine
+            ic_1 = np.full(look.size, np.nan)
         reach_1 = values.margins(at) if reach.shape[1] else np.empty((look.size, 0))
         dex_1 = _dexterity_margin(ic_1, limit)
         t2, which = refined(reach, np.ascontiguousarray(reach_1), dex_in, dex_1, dex_out, look, t1)
         t[look] = t2
-        reachable_1 = np.isfinite(ic_1)
         if start.shape[0]:
+            reachable_1 = np.isfinite(ic_1)
             dexterous_first = reachable_1 & (which == reach.shape[1])
             ic_there = np.where(dexterous_first, limit, np.nan_to_num(ic_1))
             at_value = np.array(_integrands(reachable_1, weight_1, ic_there, start.shape[0]))
@@ -657,7 +657,7 @@ def _dexterity_fraction(ic_in: np.ndarray, ic_out: np.ndarray, limit: float) -> 
     root of the distance to it and its square linearly; where ``1/kappa`` is smooth both are
     second order."""
     with np.errstate(invalid="ignore", divide="ignore"):
-        return (ic_in**2 - limit**2) / (ic_in**2 - ic_out**2)
+        return _dexterity_margin(ic_in, limit) / (ic_in**2 - ic_out**2)
 
 
 def _bisect_membership(
@@ -1334,7 +1334,7 @@ def _occupied_box(
         p_in, p_out = np.concatenate([job[3] for job in jobs]), np.concatenate([job[4] for job in jobs])
         # on the margins where the mechanism has them (any crossing of the edge will do: the box
         # is widened by the edge's length), by multisection elsewhere
-        crossing, _ = _crossings(values, probe.copy(), column, p_in, p_out, np.empty((0, p_in.size)), None)
+        crossing, _ = _crossings(values, probe, column, p_in, p_out, np.empty((0, p_in.size)), None)
         left = np.nonzero(np.isnan(crossing))[0]
         if left.size:
             crossing[left] = _multisect(values, probe[left], column[left], p_in[left], p_out[left], rounds)
@@ -1491,11 +1491,7 @@ def _integrate_sections(mechanism, resolution, orientation, min_ic, length):
 def _has_sections(mechanism: Mechanism, fixed: dict[str, float]) -> bool:
     """Whether ``method="grid"`` integrates by exact sections (the mechanism provides them and
     no pose variable is fixed)."""
-    return (
-        not fixed
-        and mechanism.section_axis is not None
-        and mechanism.exact_sections(np.zeros((0, mechanism.dof)), 0.0, 1.0, 0.0) is not None
-    )
+    return not fixed and mechanism.section_axis is not None
 
 
 # ------------------------------------------------------------------ polar
