@@ -82,7 +82,7 @@ class Delta(Mechanism):
         FixedParameter("z_max", 0.0, -100000.0, 0.0, "mm"),
     )
     default_nodes = 32**3
-    grid_nodes = 26**3  # V, GDI within 0.1 % on the designs of docs/accuracy.md
+    grid_nodes = 26**3  # V, GDI within 0.1 % on the ladder designs of docs/accuracy.md (its random scan: not on all)
     min_resolution = 16
 
     design_variables = (

@@ -173,7 +173,7 @@ class Tricept(Mechanism):
         FixedParameter("homogenising", "arm", choices=("arm", "a", "d", "none")),
     )
     default_nodes = 32**3
-    grid_nodes = 28**3  # V, GDI within 0.1 % on the designs of docs/accuracy.md
+    grid_nodes = 28**3  # V, GDI within 0.1 % on the ladder designs of docs/accuracy.md (its random scan: not on all)
     min_resolution = 16
 
     design_variables = (

@@ -34,7 +34,7 @@ in closed form; the integrand of a cut cell is taken at that centroid. Exact
 for a planar boundary and second order for a smooth one, and continuous in the
 design (no step when the boundary crosses a node); it costs 2-5x the plain
 count at each mechanism's default (docs/accuracy.md). Its default resolution
-is the mechanism's ``grid_nodes`` budget where set (H4 27^3, Tricept 28^3,
+is the mechanism's ``grid_nodes`` budget where set (H4 28^3, Tricept 28^3,
 Delta 26^3), else ``default_nodes``. ``method="midpoint"``: the plain
 cell-centre count on a regular grid of ``default_nodes`` (first order; it moves
 in steps as the boundary crosses cell centres), the objective of earlier
@@ -1595,7 +1595,7 @@ def evaluate(
         Grid points per sampled axis (larger is finer; doubling it refines
         every axis). Default :func:`default_resolution`: for ``method="grid"`` the node budget
         :attr:`~kinematics.base.Mechanism.grid_nodes` spread over the sampled axes where set
-        (H4 27, Tricept 28, Delta 26), else :attr:`~kinematics.base.Mechanism.default_nodes`
+        (H4 28, Tricept 28, Delta 26), else :attr:`~kinematics.base.Mechanism.default_nodes`
         (H4 24, Tricept 32, 3-RPR 32 over (x, y, phi) or 181 at constant phi, 2-RPR 400), which
         ``method="midpoint"`` always takes.
     orientation : (float, float), optional

@@ -112,15 +112,33 @@ def test_grid_method_has_its_own_node_budget():
 
 
 # --------------------------------------------------- default vs reference
-#: measured misses of the 0.1 % target (benchmarks/accuracy.py); strict: they fail today
-KNOWN_MISSES: dict[tuple[str, str], str] = {}
+#: design vectors (``from_design``, default fixed parameters) of the random designs of
+#: benchmarks/accuracy.py's scan (seed 7) on which the default misses 0.1 %, mostly features
+#: thinner than a cell or sharp corners (docs/accuracy.md, "Order"), with the error measured there
+THIN = {
+    "delta": [0.5563, 2.815],  # scan 0: V 0.20 %, workspace 5.7 % of its cylinder
+    "rpr2": [6.5996, 8.9338],  # scan 8: V 0.18 % of RPR2.exact_area (annuli 0.67 wide)
+    "rpr3": [259.4139, 57.4348],  # scan 3: V 1.8 %, a sliver of 9e-6 of the reference volume
+    "tricept": [255.3497, 499.1001, 162.6791],  # scan 5: V 0.11 %
+}
+#: measured misses of the 0.1 % target (benchmarks/accuracy.py); strict: they fail today, and a
+#: cell rule that holds two boundaries per cell should turn them into passes
+_THIN_CELL = "one plane per cell cannot hold a feature thinner than a cell (docs/accuracy.md)"
+KNOWN_MISSES: dict[tuple[str, str], str] = {
+    ("delta", "thin"): _THIN_CELL,
+    # not thin (13 cells wide): corners where two annuli 0.67 wide meet at grazing angles, second
+    # order with a large constant (vs RPR2.exact_area: 0.71 %, 0.18 %, 0.04 % at 200, 400, 800)
+    ("rpr2", "thin"): "corners of two narrow annuli meeting at grazing angles: 0.18 % at the default",
+    ("tricept", "thin"): _THIN_CELL,
+    ("rpr3", "thin"): "a sliver workspace: the (y, phi) rule across the exact x-sections resolves it to 2 %",
+}
 
 
 def _cases():
     out = []
     for name in sorted(MECHANISMS):
-        for label in ("paper", "optimum", "random"):
-            if label == "optimum" and name not in OPTIMA:
+        for label in ("paper", "optimum", "random", "thin"):
+            if (label == "optimum" and name not in OPTIMA) or (label == "thin" and name not in THIN):
                 continue
             reason = KNOWN_MISSES.get((name, label))
             marks = [pytest.mark.slow] + ([pytest.mark.xfail(strict=True, reason=reason)] if reason else [])
@@ -134,6 +152,9 @@ def test_default_resolution_within_0p1_percent_of_a_fine_reference(name, label):
         mech = get_mechanism(name, **PAPER_DESIGNS[name])
     elif label == "optimum":
         mech = get_mechanism(name, **OPTIMA[name])
+    elif label == "thin":
+        cls = MECHANISMS[name]
+        mech = cls.from_design(np.array(THIN[name]), **cls.default_fixed)
     else:
         mech = random_design(name, seed=1)
     ev = evaluate(mech, error_estimate=False, method="grid")
