@@ -116,10 +116,10 @@ def test_grid_method_has_its_own_node_budget():
 #: benchmarks/accuracy.py's scan (seed 7) on which the default misses 0.1 %, mostly features
 #: thinner than a cell or sharp corners (docs/accuracy.md, "Order"), with the error measured there
 THIN = {
-    "delta": [0.5563, 2.815],  # scan 0: V 0.20 %, workspace 5.7 % of its cylinder
-    "rpr2": [6.5996, 8.9338],  # scan 8: V 0.18 % of RPR2.exact_area (annuli 0.67 wide)
-    "rpr3": [259.4139, 57.4348],  # scan 3: V 1.8 %, a sliver of 9e-6 of the reference volume
-    "tricept": [255.3497, 499.1001, 162.6791],  # scan 5: V 0.11 %
+    "delta": [0.5563120532930336, 2.814984841745236],  # scan 0: V 0.20 %, workspace 5.7 % of its cylinder
+    "rpr2": [6.599613064970464, 8.93376088609131],  # scan 8: V 0.18 % of RPR2.exact_area (annuli 0.67 wide)
+    "rpr3": [259.41388575040924, 57.434796227497664],  # scan 3: V 1.8 %, a sliver of 9e-6 of the reference volume
+    "tricept": [255.34973520744924, 499.10005668687853, 162.67914545847555],  # scan 5: V 0.11 %
 }
 #: measured misses of the 0.1 % target (benchmarks/accuracy.py); strict: they fail today, and a
 #: cell rule that holds two boundaries per cell should turn them into passes
@@ -141,7 +141,9 @@ def _cases():
             if (label == "optimum" and name not in OPTIMA) or (label == "thin" and name not in THIN):
                 continue
             reason = KNOWN_MISSES.get((name, label))
-            marks = [pytest.mark.slow] + ([pytest.mark.xfail(strict=True, reason=reason)] if reason else [])
+            marks = [pytest.mark.slow] + (
+                [pytest.mark.xfail(strict=True, raises=AssertionError, reason=reason)] if reason else []
+            )
             out.append(pytest.param(name, label, marks=marks, id=f"{name}-{label}"))
     return out
 
@@ -158,7 +160,9 @@ def test_default_resolution_within_0p1_percent_of_a_fine_reference(name, label):
     else:
         mech = random_design(name, seed=1)
     ev = evaluate(mech, error_estimate=False, method="grid")
-    ref = evaluate(mech, resolution=4 * default_resolution(mech), error_estimate=False, method="grid")
+    # the scan's reference (benchmarks/accuracy.py): 4x the finer of the two methods' defaults
+    finest = max(default_resolution(mech), default_resolution(mech, method="midpoint")) if label == "thin" else None
+    ref = evaluate(mech, resolution=4 * (finest or default_resolution(mech)), error_estimate=False, method="grid")
     assert ev.volume == pytest.approx(ref.volume, rel=TARGET)
     assert ev.gdi == pytest.approx(ref.gdi, rel=TARGET)
     assert ev.mixed(W_D) == pytest.approx(ref.mixed(W_D), rel=TARGET)
