@@ -32,8 +32,8 @@ of the edge; a mechanism without margins is bisected), the boundary is taken as 
 crossing along each axis and the fraction and centroid of the cut cell follow
 in closed form; the integrand of a cut cell is taken at that centroid. Exact
 for a planar boundary and second order for a smooth one, and continuous in the
-design (no step when the boundary crosses a node); it costs 2-5x the plain
-count at each mechanism's default (docs/accuracy.md). Its default resolution
+design (no step when the boundary crosses a node); it costs more than the plain
+count at each mechanism's default (the ratios: docs/accuracy.md). Its default resolution
 is the mechanism's ``grid_nodes`` budget where set (H4 28^3, Tricept 28^3,
 Delta 26^3), else ``default_nodes``. ``method="midpoint"``: the plain
 cell-centre count on a regular grid of ``default_nodes`` (first order; it moves
@@ -311,8 +311,10 @@ def default_resolution(
     method, the default) or ``mechanism.default_nodes`` (``method="midpoint"``, or a
     mechanism without a grid budget).
 
-    The grid method's budgets are where its V, GDI and eta come within about 0.1 % of
-    their converged values on the designs of benchmarks/accuracy.py (docs/accuracy.md);
+    The grid method's budgets are where its V, GDI and eta come within 0.1 % of their
+    converged values on the ladder's designs of benchmarks/accuracy.py (paper designs,
+    documented optima, two random ones; its scan of further random designs finds misses:
+    docs/accuracy.md);
     the midpoint budgets kept a GA run of 4,500 evaluations near a minute on 2 workers.
     """
     if orientation is None:
@@ -1611,8 +1613,8 @@ def evaluate(
         mechanism's).
     method : {"grid", "midpoint", "polar"}
         The grid with boundary cells counted by their inside fraction (the
-        default: second order, continuous in the design; 2-5x the cost of the
-        plain count at the defaults), the plain cell-centre count (first order,
+        default: second order, continuous in the design; dearer than the plain
+        count at the defaults, docs/accuracy.md), the plain cell-centre count (first order,
         the objective of earlier versions), or the Tricept paper's polar
         boundary search.
     fixed : dict, optional
