@@ -221,6 +221,31 @@ def best_time(func, repeats: int = REPEATS) -> float:
     return best
 
 
+def alternate_times(mech, resolutions: dict[str, int | None]) -> dict[str, float]:
+    """Least CPU seconds of one evaluation of ``mech`` per method of ``resolutions`` (method ->
+    resolution, None: its default) over :data:`REPEATS` rounds that time the methods
+    alternately: the machine's load hits both alike."""
+    best = dict.fromkeys(resolutions, math.inf)
+    for _ in range(REPEATS):
+        for method, resolution in resolutions.items():
+            best[method] = min(
+                best[method],
+                best_time(
+                    lambda r=resolution, k=method: evaluate(mech, resolution=r, method=k, error_estimate=False), 1
+                ),
+            )
+    return best
+
+
+#: the quantities of :func:`quantities`, in its order
+QUANTITIES = ("V", "GDI", "eta")
+
+
+def percentages(values: np.ndarray) -> str:
+    """A triple of relative errors (V, GDI, eta) as ``a % / b % / c %``."""
+    return " / ".join(f"{100 * v:.3f} %" for v in values)
+
+
 def quantities(ev) -> np.ndarray:
     return np.array([ev.volume, ev.gdi, ev.mixed(W_D)])
 
@@ -243,24 +268,11 @@ def study(name: str) -> dict:
         errors = {"midpoint": [], "grid": []}
         seconds = {"midpoint": [], "grid": []}
         for (_, mech), ref in zip(cases, refs):
-            best = {}
             for method in errors:
                 ev = evaluate(mech, resolution=res[method], method=method, error_estimate=False)  # compile, warm
                 errors[method].append(np.abs(quantities(ev) / ref - 1))
-                best[method] = math.inf
-            for _ in range(REPEATS):  # old and new alternately: the machine's load hits both alike
-                for method in errors:
-                    best[method] = min(
-                        best[method],
-                        best_time(
-                            lambda m=mech, r=res[method], k=method: evaluate(
-                                m, resolution=r, method=k, error_estimate=False
-                            ),
-                            1,
-                        ),
-                    )
-            for method in errors:
-                seconds[method].append(best[method])
+            for method, best in alternate_times(mech, res).items():
+                seconds[method].append(best)
         for method in errors:
             err = np.max(errors[method], axis=0)
             rows.append(
@@ -349,12 +361,7 @@ def phases(name: str) -> dict[str, float] | None:
             best = spent
     if best is None:
         return None
-    times = {"midpoint": math.inf, "grid": math.inf}
-    for _ in range(REPEATS):
-        for method in times:
-            times[method] = min(
-                times[method], best_time(lambda k=method: evaluate(mech, method=k, error_estimate=False), 1)
-            )
+    times = alternate_times(mech, dict.fromkeys(METHODS))
     share = {phase: best[phase] / best["total"] for phase in ("coarse", "boundary")}
     share["fine"] = 1.0 - share["coarse"] - share["boundary"]
     return {phase: value * times["grid"] for phase, value in share.items()} | {
@@ -394,17 +401,13 @@ def scan_table(results: list[dict]) -> str:
         new, old = r["scan"]["grid"], r["scan"]["midpoint"]
         if not new.size:
             continue
-
-        def triple(values: np.ndarray) -> str:
-            return " / ".join(f"{100 * v:.3f} %" for v in values)
-
         worst, column = np.unravel_index(int(np.argmax(new)), new.shape)
-
         lines.append(
-            f"| {r['name']} | {new.shape[0]} | {triple(new.max(axis=0))} | {triple(np.median(new, axis=0))} | "
+            f"| {r['name']} | {new.shape[0]} | {percentages(new.max(axis=0))} | "
+            f"{percentages(np.median(new, axis=0))} | "
             f"{int((new.max(axis=1) > ERROR_TARGET).sum())} | {r['scan']['suri'][worst]:.2g} | "
-            f"{('V', 'GDI', 'eta')[column]} {100 * new[worst, column]:.3f} %, "
-            f"{100 * r['scan']['estimate'][worst, column]:.3f} % | {triple(old.max(axis=0))} |"
+            f"{QUANTITIES[column]} {100 * new[worst, column]:.3f} %, "
+            f"{100 * r['scan']['estimate'][worst, column]:.3f} % | {percentages(old.max(axis=0))} |"
         )
     return "\n".join(lines)
 
@@ -455,7 +458,7 @@ def verdict(results: list[dict]) -> str:
         if scanned.size:
             column = int(np.argmax(scanned.max(axis=0)))
             value = float(scanned.max())
-            label = f"{('V', 'GDI', 'eta')[column]} {100 * value:.3f} %"
+            label = f"{QUANTITIES[column]} {100 * value:.3f} %"
             widely.append((r["name"], value <= ERROR_TARGET, label))
 
     def line(title: str, items: list) -> str:
@@ -490,10 +493,8 @@ def summary(results: list[dict]) -> str:
         lines.append(
             f"| {r['name']} | {old['resolution']}, {1e3 * old['seconds']:.1f} | {new['resolution']}, "
             f"{1e3 * new['seconds']:.1f} | **{new['seconds'] / old['seconds']:.2f}x** | "
-            + " / ".join(f"{100 * new[k]:.3f} %" for k in ("v", "gdi", "eta"))
-            + " | "
-            + " / ".join(f"{100 * old[k]:.3f} %" for k in ("v", "gdi", "eta"))
-            + " |"
+            + f"{percentages([new[k] for k in ('v', 'gdi', 'eta')])} | "
+            + f"{percentages([old[k] for k in ('v', 'gdi', 'eta')])} |"
         )
     return "\n".join(lines)
 

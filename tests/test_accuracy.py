@@ -160,9 +160,10 @@ def test_default_resolution_within_0p1_percent_of_a_fine_reference(name, label):
     else:
         mech = random_design(name, seed=1)
     ev = evaluate(mech, error_estimate=False, method="grid")
-    # the scan's reference (benchmarks/accuracy.py): 4x the finer of the two methods' defaults
-    finest = max(default_resolution(mech), default_resolution(mech, method="midpoint")) if label == "thin" else None
-    ref = evaluate(mech, resolution=4 * (finest or default_resolution(mech)), error_estimate=False, method="grid")
+    reference = default_resolution(mech)
+    if label == "thin":  # the scan's reference (benchmarks/accuracy.py): 4x the finer of the two defaults
+        reference = max(reference, default_resolution(mech, method="midpoint"))
+    ref = evaluate(mech, resolution=4 * reference, error_estimate=False, method="grid")
     assert ev.volume == pytest.approx(ref.volume, rel=TARGET)
     assert ev.gdi == pytest.approx(ref.gdi, rel=TARGET)
     assert ev.mixed(W_D) == pytest.approx(ref.mixed(W_D), rel=TARGET)
