@@ -86,7 +86,7 @@ is `docs/figures/accuracy_convergence.png`.
 2. **Cells.** Nodes at cell centres, `resolution` per sampled axis (H4's z still integrated
    exactly per column). The default resolution is the mechanism's node budget `grid_nodes`
    where it sets one (H4 28^3, Tricept 28^3, Delta 26^3), else `default_nodes` (Gough-Stewart
-   32^3, 2-RPR 400^2). A node without a boundary crossing on its edges counts its whole cell
+   32^3). A node without a boundary crossing on its edges counts its whole cell
    (inside) or nothing (outside).
 3. **Crossings on the margins.** Every built-in mechanism states its reachability margins
    (`Mechanism.constraint_margins`; H4 per (x, y, theta) column, `exact_axis_margins`): smooth
@@ -117,16 +117,21 @@ is `docs/figures/accuracy_convergence.png`.
    inside node beyond it (outside node).
 6. **Bookkeeping is sparse.** The sums are the plain node sums plus, over the nodes next to a
    crossing only, (cut-cell value - plain value), summed compiled.
-7. **3-RPR: exact sections** (`RPR3.exact_sections`). Its workspace at (y, phi) is, along x, the
-   intersection of three annuli (seed 003 eq. 12-14): at most four intervals, in closed form.
-   V sums their lengths over a midpoint rule in (y, phi) (phi in `resolution` layers, y in 1.5x
+7. **Planar mechanisms: exact sections** (`RPR3.exact_sections`, `RPR2.exact_sections`, one
+   kernel for both: `kinematics.annuli.annuli_x_sections`). The 3-RPR's workspace at (y, phi)
+   is, along x, the intersection of three annuli (seed 003 eq. 12-14): at most four intervals,
+   in closed form; the 2-RPR's at y the intersection of two (seed 004 eq. 1-2). V sums their lengths over a midpoint rule in (y, phi) (phi in `resolution` layers, y in 1.5x
    as many rows, each layer's rows shifted by a golden-ratio fraction of a row, so that the
    annulus that does not turn with phi is not met at the same offset in every layer); 1/kappa
    (closed form for the 3 x 3 Jacobian, its sign kept so that it stays smooth through a
    singularity) by a corrected trapezoid rule along each interval, the dexterity limit placed by
-   interpolation. This replaces the grid for the 3-RPR, whose thin slivers (annuli meeting at
-   grazing angles, narrower than a cell) one plane per cell could not hold (0.56 % at 32^3 on a
-   random design before).
+   interpolation. This replaces the grid for the planar mechanisms, whose thin slivers and
+   sharp corners (annuli meeting at grazing angles, narrower than a cell) one plane per cell
+   could not hold (3-RPR: 0.56 % at 32^3 on a random design before; 2-RPR: 0.18 % at 400^2 on
+   the scan's worst design). Where the reachable volume is known in closed form (2-RPR:
+   `RPR2.exact_area`, `Mechanism.exact_volume`), V is that volume less the sections'
+   non-dexterous part, so that the rule across the sections errs only on the dexterity limit's
+   band, and the GDI stays the ratio of two sums on the same rows (their errors cancel).
 
 **Order.** Exact for a planar boundary; for a smooth boundary the plane through the crossings is
 second-order accurate (the crossings are on the boundary to third order), so the volume error is
@@ -139,19 +144,20 @@ through crossings of both, and the resolution at which a feature falls between g
 decides the error (on such a Gough-Stewart design the error changes by an order of magnitude
 between neighbouring resolutions, while its crossings agree with 20 bisections each). A default
 within 0.1 % on the ladder's designs is therefore not a guarantee on every design: the scan of
-further random designs below measures how far it holds. Its other misses are sharp corners
-(2-RPR: two narrow annuli meeting at grazing angles converge at second order, with a large
-constant, against `RPR2.exact_area`) and sliver workspaces (a 3-RPR design whose workspace is a
-tiny part of the reference volume: the V / V* column). The fix is a cell rule that keeps every crossing of a cell (e.g. the cell
+further random designs below measures how far it holds. Its other miss is a sliver workspace (a
+3-RPR design whose workspace is a tiny part of the reference volume: the V / V* column). The fix is a cell rule that keeps every crossing of a cell (e.g. the cell
 between eight nodes split into tetrahedra, each cut by its own plane), not yet built. The
-3-RPR's sections converge like h^1.5 across (y, phi) (where a section shrinks to nothing, its
-length falls like a square root).
+planar mechanisms' sections converge like h^1.5 across (y, phi) (where a section shrinks to
+nothing, its length falls like a square root), irregularly (the 2-RPR's reachable sections
+against `RPR2.exact_area` on its paper design: +0.045 %, -0.020 %, +0.026 % at 200, 400, 800,
+which the closed-form volume takes out of its V).
 
 **Independent references.** The reference of each design below is the same method at
 4x the finer of the two defaults (cross-checked against the old method there). Where the exact value is
-known independently of any grid, the tests hold the default to it: the 2-RPR's area
-(`RPR2.exact_area`, two annuli in closed form) on six random designs within 0.1 %
-(`tests/test_accuracy.py`; the old count errs by up to 0.27 % on them), and the 3-RPR's
+known independently of any grid, the tests hold the default to it: the 2-RPR's reachable area
+(`RPR2.exact_area`, two annuli in closed form) against the sum of its sections before the
+closed form replaces it (six random designs within 0.1 %; the old count errs by up to 0.27 % on
+them), its dexterous area against the cell grid at 4x the default, and the 3-RPR's
 constant-orientation area (`RPR3.exact_area`).
 
 **Continuity.** When the boundary crosses a node, the plane passes through the node and its

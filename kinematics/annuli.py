@@ -3,7 +3,9 @@
 A planar RPR leg of length ``rho_min..rho_max`` confines its platform joint to
 an annulus; at constant orientation the 2-RPR and 3-RPR workspaces are
 intersections of annuli (seed 003 eq. 12-14, seed 004). These functions give
-their areas exactly, as references for the grid integration.
+their areas exactly, as references for the grid integration, and their exact
+sections along x (:func:`annuli_x_sections`), on which ``workspace.evaluate``
+integrates the planar mechanisms.
 """
 
 from __future__ import annotations
@@ -12,6 +14,8 @@ import itertools
 import math
 
 import numpy as np
+
+from kinematics import kernels
 
 
 def lens_area(r1: float, r2: float, distance: float) -> float:
@@ -103,3 +107,175 @@ def annuli_intersection_area(centres: np.ndarray, r_in: np.ndarray, r_out: np.nd
             inter = discs_intersection_area(np.vstack([centres, centres[sub]]), np.concatenate([r_out, r_in[sub]]))
             area -= (-1) ** (size + 1) * inter
     return max(area, 0.0)
+
+
+# ----------------------------------------------------- exact x-sections
+@kernels.inline_jit
+def _above(s0, s1, level):
+    """Part of a segment where the linear interpolant of s (from s0 to s1) exceeds ``level``:
+    ``(fraction, integral of s over it per unit length)``."""
+    if s0 > level and s1 > level:
+        return 1.0, 0.5 * (s0 + s1)
+    if s0 <= level and s1 <= level:
+        return 0.0, 0.0
+    t = (s0 - level) / (s0 - s1)
+    if s0 > level:
+        return t, t * 0.5 * (s0 + level)
+    return 1.0 - t, (1.0 - t) * 0.5 * (level + s1)
+
+
+@kernels.inline_jit
+def _segment(s0, s1, d0, d1, limit, width):
+    """Dexterous measure and integral of ``|s|`` on a segment of ``width`` (length unit) with the signed
+    ``1/kappa`` s0, s1 and its x-derivatives d0, d1 at the ends: ``|s|`` linear between the
+    ends, cut where it meets ``limit`` (0: no limit), plus the Hermite (corrected trapezoid)
+    term ``width^2 / 12 (d|s|_0 - d|s|_1)`` times the dexterous fraction (continuous)."""
+    f_pos, i_pos = _above(s0, s1, limit)
+    f_neg, i_neg = _above(-s0, -s1, limit)
+    fraction = 1.0 if limit <= 0.0 else f_pos + f_neg
+    integral = (i_pos + i_neg) * width
+    if s0 * s1 > 0.0:
+        sign = 1.0 if s0 > 0.0 else -1.0
+        integral += fraction * width * width / 12.0 * sign * (d0 - d1)
+    return fraction * width, integral
+
+
+@kernels.jit
+def annuli_x_sections(ys, centres_x, centres_y, rho_min, rho_max, signed_ic, row_args, origin, step, limit):
+    """Exact sections along x of intersections of annuli, and ``1/kappa`` integrated along them.
+
+    Row p (at ``y = ys[p]``) is the set of x with ``rho_min <= |(x, y) - c_pi| <= rho_max`` for
+    every centre ``c_pi = (centres_x[p, i], centres_y[p, i])`` (a planar RPR leg per annulus:
+    seed 003 eq. 12-14, seed 004 eq. 1-2): the intersection of the outer discs' chords, an
+    interval, minus the inner discs' chords, in closed form (at most ``m + 1`` intervals for m
+    annuli). Along each interval the signed inverse condition number
+    ``s = signed_ic(x, y, row_args[p])`` (``sign(det J) / kappa``, smooth through a singularity)
+    is sampled at the interval's ends and at the nodes ``origin + k step`` inside it, with its
+    x-derivative (a difference over ``1e-6 step``); the dexterous part ``|s| > limit`` is cut
+    where the linear interpolant of s meets the limit (each such crossing is sampled too), and
+    ``|s|`` is integrated by the corrected trapezoid rule (cubic Hermite, :func:`_segment`).
+    Every quantity moves continuously with the centres and ``y``.
+
+    Parameters
+    ----------
+    ys : ndarray, shape (N,)
+        The rows' y (length unit of the mechanism, e.g. mm).
+    centres_x, centres_y : ndarray, shape (N, m)
+        Annulus centres per row (same unit).
+    rho_min, rho_max : float
+        Inner and outer radius of every annulus (the leg range).
+    signed_ic : compiled function ``(x, y, args) -> float``
+        Signed ``1/kappa`` at (x, y) of the row whose arguments are ``args`` (1-D float array).
+    row_args : ndarray, shape (N, k)
+        Per-row arguments of ``signed_ic``.
+    origin, step : float
+        Sample nodes along x, ``step > 0``.
+    limit : float
+        Dexterity limit on ``|s|`` (0: none).
+
+    Returns
+    -------
+    measure, reach, integral, ic_min, ic_max : ndarray, shape (N,)
+        Length of each dexterous section, of the reachable section (the intervals, whatever
+        ``1/kappa``), the integral of ``1/kappa`` over the dexterous one, the extremes of
+        ``1/kappa`` over its samples (inf / -inf for an empty section).
+    evaluated : int
+        Evaluations of ``signed_ic`` (the cost).
+    """
+    count, legs = centres_x.shape
+    measure = np.zeros(count)
+    reach = np.zeros(count)
+    integral = np.zeros(count)
+    ic_min = np.full(count, np.inf)
+    ic_max = np.full(count, -np.inf)
+    evaluated = 0
+    size = 2 * legs + 2
+    lo, hi, lo2, hi2 = np.empty(size), np.empty(size), np.empty(size), np.empty(size)
+    outer2, inner2 = rho_max * rho_max, rho_min * rho_min
+    delta = 1e-6 * step  # forward difference of the x-derivative
+    for p in range(count):
+        y = ys[p]
+        args = row_args[p]
+        left, right = -np.inf, np.inf
+        for i in range(legs):
+            b = y - centres_y[p, i]
+            w2 = outer2 - b * b
+            if w2 < 0.0:
+                left, right = 1.0, 0.0
+                break
+            w = math.sqrt(w2)
+            left, right = max(left, centres_x[p, i] - w), min(right, centres_x[p, i] + w)
+        if not right > left:
+            continue
+        n = 1
+        lo[0], hi[0] = left, right
+        for i in range(legs):  # remove the inner discs (|L_i| < rho_min)
+            b = y - centres_y[p, i]
+            w2 = inner2 - b * b
+            if w2 <= 0.0:
+                continue
+            w = math.sqrt(w2)
+            hole_lo, hole_hi = centres_x[p, i] - w, centres_x[p, i] + w
+            k = 0
+            for j in range(n):
+                if hole_hi <= lo[j] or hole_lo >= hi[j]:
+                    lo2[k], hi2[k] = lo[j], hi[j]
+                    k += 1
+                    continue
+                if hole_lo > lo[j]:
+                    lo2[k], hi2[k] = lo[j], hole_lo
+                    k += 1
+                if hole_hi < hi[j]:
+                    lo2[k], hi2[k] = hole_hi, hi[j]
+                    k += 1
+            n = k
+            for j in range(n):
+                lo[j], hi[j] = lo2[j], hi2[j]
+        total, weighted = 0.0, 0.0
+        for j in range(n):
+            reach[p] += hi[j] - lo[j]
+            end = hi[j]
+            xa = lo[j]
+            sa = signed_ic(xa, y, args)
+            da = (signed_ic(xa + delta, y, args) - sa) / delta
+            evaluated += 2
+            k = math.floor((xa - origin) / step) + 1
+            while True:
+                xb = min(origin + k * step, end)
+                sb = signed_ic(xb, y, args)
+                db = (sb - signed_ic(xb - delta, y, args)) / delta
+                evaluated += 2
+                if abs(sb) > limit:
+                    ic_min[p], ic_max[p] = min(ic_min[p], abs(sb)), max(ic_max[p], abs(sb))
+                xc, sc, dc = xa, sa, da
+                if limit > 0.0:
+                    # the limit's crossings by linear interpolation become samples too
+                    t1, t2 = 2.0, 2.0
+                    for level in (limit, -limit):
+                        if (sa - level) * (sb - level) < 0.0:
+                            t = (sa - level) / (sa - sb)
+                            if t1 > 1.0:
+                                t1 = t
+                            else:
+                                t2 = t
+                    if t2 < t1:
+                        t1, t2 = t2, t1
+                    for t in (t1, t2):
+                        if t < 1.0:
+                            xt = xa + t * (xb - xa)
+                            st = signed_ic(xt, y, args)
+                            dt = (signed_ic(xt + delta, y, args) - st) / delta
+                            evaluated += 2
+                            dm, di = _segment(sc, st, dc, dt, limit, xt - xc)
+                            total += dm
+                            weighted += di
+                            xc, sc, dc = xt, st, dt
+                dm, di = _segment(sc, sb, dc, db, limit, xb - xc)
+                total += dm
+                weighted += di
+                if xb >= end:
+                    break
+                xa, sa, da = xb, sb, db
+                k += 1
+        measure[p], integral[p] = total, weighted
+    return measure, reach, integral, ic_min, ic_max, evaluated

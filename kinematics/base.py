@@ -339,18 +339,26 @@ class Mechanism(ABC):
 
     def exact_sections(
         self, poses: np.ndarray, origin: float, step: float, min_inverse_condition: float, length: float | None = None
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int] | None:
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int] | None:
         """Optional exact 1-D sections of the workspace along :attr:`section_axis`.
 
         For each row of ``poses`` (N, dof) (its value in the section column ignored):
         the measure of the dexterous section (``1/kappa > min_inverse_condition``; the section's
-        reachable intervals in closed form), the integral of ``1/kappa`` over it, the extremes
-        of ``1/kappa`` over its samples and the number of Jacobians evaluated; ``1/kappa`` is
-        sampled at the intervals' ends and at the nodes ``origin + k step``. Used by
-        ``workspace.evaluate(method="grid")`` in place of the cut-cell grid (3-RPR:
-        :meth:`kinematics.rpr3.RPR3.exact_sections`). ``None`` (the default, with
+        reachable intervals in closed form), the measure of the reachable section, the integral
+        of ``1/kappa`` over the dexterous one, the extremes of ``1/kappa`` over its samples and
+        the number of Jacobians evaluated; ``1/kappa`` is sampled at the intervals' ends and at
+        the nodes ``origin + k step``. Used by ``workspace.evaluate(method="grid")`` in place of
+        the cut-cell grid (3-RPR: :meth:`kinematics.rpr3.RPR3.exact_sections`, 2-RPR:
+        :meth:`kinematics.rpr2.RPR2.exact_sections`). ``None`` (the default, with
         :attr:`section_axis` None): no such sections.
         """
+        return None
+
+    def exact_volume(self, orientation: tuple[float, float]) -> float | None:
+        """Optional closed-form volume of the reachable workspace (no dexterity limit) over the
+        whole pose box at ``orientation`` (rad), in :meth:`volume_unit`; ``None`` (the default):
+        not known. With :meth:`exact_sections`, ``evaluate(method="grid")`` takes it for V less
+        the sections' non-dexterous part (2-RPR: :meth:`kinematics.rpr2.RPR2.exact_area`)."""
         return None
 
     def volume_unit(self, orientation: tuple[float, float] | None = None, fixed: dict[str, float] | None = None) -> str:

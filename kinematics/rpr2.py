@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from kinematics import kernels
-from kinematics.annuli import two_annuli_area
+from kinematics.annuli import annuli_x_sections, two_annuli_area
 from kinematics.base import DesignVariable, FixedParameter, Mechanism, check_positive, check_range
 
 
@@ -77,6 +77,64 @@ class RPR2(Mechanism):
         """Exact workspace area (mm^2), no dexterity limit: two annuli ``q_min..q_max``
         around O_1 and O_2, by the closed-form lens areas (:func:`~kinematics.annuli.two_annuli_area`)."""
         return two_annuli_area(self.b, self.q_min, self.q_max)
+
+    #: the pose variable integrated in closed form by :meth:`exact_sections` (x)
+    section_axis = 0
+
+    def exact_sections(
+        self, poses: np.ndarray, origin: float, step: float, min_inverse_condition: float, length: float | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+        """Workspace sections along x at given y, exact in their ends.
+
+        At fixed y leg i gives ``q_min^2 <= (x - O_ix)^2 + y^2 <= q_max^2`` (eq. 1-2): the
+        intersection of two annuli around O_1, O_2, at most three intervals of x, in closed form
+        (:func:`~kinematics.annuli.annuli_x_sections`, which also integrates ``1/kappa`` along
+        them: signed, ``sign(det J) / kappa`` of :func:`_rpr2_signed_inverse_condition`).
+
+        Parameters
+        ----------
+        poses : ndarray, shape (N, 2)
+            Rows ``(x, y)`` (mm); the x column is ignored.
+        origin, step : float
+            Sample nodes of ``1/kappa`` along x (mm), ``step > 0``.
+        min_inverse_condition : float
+            Dexterity limit on ``1/kappa`` (0: none).
+        length : float, optional
+            Unused: the 2-RPR's Jacobian has no angular column.
+
+        Returns
+        -------
+        measure : ndarray, shape (N,)
+            Length (mm) of the dexterous section.
+        reach : ndarray, shape (N,)
+            Length (mm) of the reachable section (whatever ``1/kappa``).
+        integral : ndarray, shape (N,)
+            Integral of ``1/kappa`` over it (mm).
+        ic_min, ic_max : ndarray, shape (N,)
+            Extremes of ``1/kappa`` over its samples (inf / -inf for an empty section).
+        evaluated : int
+            Jacobians evaluated (the cost).
+        """
+        poses = self._check_poses(poses)
+        if not step > 0:
+            raise ValueError(f"RPR2.exact_sections: step must be > 0 (mm); got {step!r}")
+        rows = len(poses)
+        return annuli_x_sections(
+            np.ascontiguousarray(poses[:, 1]),
+            np.ascontiguousarray(np.broadcast_to(self.base[:, 0], (rows, 2))),
+            np.ascontiguousarray(np.broadcast_to(self.base[:, 1], (rows, 2))),
+            self.q_min,
+            self.q_max,
+            _rpr2_signed_inverse_condition,
+            np.full((rows, 1), self.b),
+            float(origin),
+            float(step),
+            float(min_inverse_condition),
+        )
+
+    def exact_volume(self, orientation: tuple[float, float]) -> float:
+        """:meth:`exact_area` (mm^2): the 2-RPR has no orientation."""
+        return self.exact_area()
 
     @property
     def characteristic_length(self) -> float:
@@ -170,3 +228,19 @@ def _rpr2_reachable_jacobians(poses, b, q_min, q_max, column_scale):
         out[p, 1, 0] = (x - b) / q2 * column_scale[0]
         out[p, 1, 1] = y / q2 * column_scale[1]
     return out
+
+
+@kernels.inline_jit
+def _rpr2_signed_inverse_condition(x, y, args):
+    """Signed ``1/kappa`` at P = (x, y) (mm) of the Jacobian of eq. 1-2, rows ``u_i = (P - O_i) / q_i``
+    (unit vectors; ``args = (b,)``, O_1 = (0, 0), O_2 = (b, 0)).
+
+    With unit rows ``sigma_1^2 + sigma_2^2 = 2`` and ``sigma_1 sigma_2 = |D|``, ``D = det J = b y /
+    (q_1 q_2)``, so ``1/kappa = sigma_2 / sigma_1 = |D| / (1 + sqrt(1 - D^2))``; the sign of D
+    keeps it smooth through the singular line y = 0 (both legs along the x axis).
+    """
+    b = args[0]
+    q1 = math.sqrt(x * x + y * y)
+    q2 = math.sqrt((x - b) * (x - b) + y * y)
+    det = b * y / (q1 * q2)
+    return det / (1.0 + math.sqrt(max(1.0 - det * det, 0.0)))

@@ -46,7 +46,7 @@ from kinematics.algebra import (
     trig_to_tan_half,
     wrap_angle,
 )
-from kinematics.annuli import annuli_intersection_area
+from kinematics.annuli import annuli_intersection_area, annuli_x_sections
 from kinematics.base import (
     DesignVariable,
     FixedParameter,
@@ -169,7 +169,7 @@ class RPR3(Mechanism):
 
     def exact_sections(
         self, poses: np.ndarray, origin: float, step: float, min_inverse_condition: float, length: float | None = None
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
         """Workspace sections along x at given (y, phi), exact in their ends.
 
         At fixed ``(y, phi)`` leg i gives ``rho_min^2 <= (x - c_ix)^2 + (y - c_iy)^2 <= rho_max^2``
@@ -199,6 +199,8 @@ class RPR3(Mechanism):
         -------
         measure : ndarray, shape (N,)
             Length (mm) of the dexterous section.
+        reach : ndarray, shape (N,)
+            Length (mm) of the reachable section (whatever ``1/kappa``).
         integral : ndarray, shape (N,)
             Integral of ``1/kappa`` over it (mm).
         ic_min, ic_max : ndarray, shape (N,)
@@ -209,14 +211,21 @@ class RPR3(Mechanism):
         poses = self._check_poses(poses)
         if not step > 0:
             raise ValueError(f"RPR3.exact_sections: step must be > 0 (mm); got {step!r}")
-        return _rpr3_x_sections(
+        phi = poses[:, 2]
+        arms = self._rotated_platform(phi)  # (N, 3, 2): Rot(phi) B'_i
+        centres = self.base - arms  # c_i = A_i - Rot(phi) B'_i (eq. 12-14)
+        scale = np.full((len(poses), 1), float(self.angular_scale(length)[2]))
+        row_args = np.ascontiguousarray(
+            np.concatenate([centres[..., 0], centres[..., 1], arms[..., 0], arms[..., 1], scale], axis=1)
+        )
+        return annuli_x_sections(
             np.ascontiguousarray(poses[:, 1]),
-            np.ascontiguousarray(poses[:, 2]),
-            np.ascontiguousarray(self.base),
-            np.ascontiguousarray(self.platform),
+            np.ascontiguousarray(centres[..., 0]),
+            np.ascontiguousarray(centres[..., 1]),
             self.rho_min,
             self.rho_max,
-            float(self.angular_scale(length)[2]),
+            _signed_inverse_condition_at,
+            row_args,
             float(origin),
             float(step),
             float(min_inverse_condition),
@@ -477,158 +486,16 @@ def _signed_inverse_condition_3x3(r00, r01, r02, r10, r11, r12, r20, r21, r22):
 
 
 @kernels.inline_jit
-def _signed_inverse_condition_at(x, y, centre_x, centre_y, arm_x, arm_y, angular_scale):
+def _signed_inverse_condition_at(x, y, args):
     """Signed ``1/kappa`` (:func:`_signed_inverse_condition_3x3`) of the homogenised Jacobian
-    of :meth:`RPR3._jacobian` at B_1 = (x, y) (mm), the legs ``L_i = (x, y) - c_i`` from the
-    annulus centres ``c_i = A_i - Rot(phi) B'_i`` (eq. 12-14), arms ``Rot(phi) B'_i``."""
+    of :meth:`RPR3._jacobian` at B_1 = (x, y) (mm); ``args`` (13,) holds the annulus centres
+    ``c_i = A_i - Rot(phi) B'_i`` (eq. 12-14; x then y), the arms ``Rot(phi) B'_i`` (x then y)
+    and the angular scale: the legs are ``L_i = (x, y) - c_i``."""
     r = np.empty(9)
     for i in range(3):
-        leg_x, leg_y = x - centre_x[i], y - centre_y[i]
+        leg_x, leg_y = x - args[i], y - args[3 + i]
         rho = math.sqrt(leg_x * leg_x + leg_y * leg_y)
         r[3 * i] = leg_x / rho
         r[3 * i + 1] = leg_y / rho
-        r[3 * i + 2] = (arm_x[i] * leg_y - arm_y[i] * leg_x) / rho * angular_scale
+        r[3 * i + 2] = (args[6 + i] * leg_y - args[9 + i] * leg_x) / rho * args[12]
     return _signed_inverse_condition_3x3(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8])
-
-
-@kernels.inline_jit
-def _above(s0, s1, level):
-    """Part of a segment where the linear interpolant of s (from s0 to s1) exceeds ``level``:
-    ``(fraction, integral of s over it per unit length)``."""
-    if s0 > level and s1 > level:
-        return 1.0, 0.5 * (s0 + s1)
-    if s0 <= level and s1 <= level:
-        return 0.0, 0.0
-    t = (s0 - level) / (s0 - s1)
-    if s0 > level:
-        return t, t * 0.5 * (s0 + level)
-    return 1.0 - t, (1.0 - t) * 0.5 * (level + s1)
-
-
-@kernels.inline_jit
-def _segment(s0, s1, d0, d1, limit, width):
-    """Dexterous measure and integral of ``|s|`` on a segment of ``width`` (mm) with the signed
-    ``1/kappa`` s0, s1 and its x-derivatives d0, d1 at the ends: ``|s|`` linear between the
-    ends, cut where it meets ``limit`` (0: no limit), plus the Hermite (corrected trapezoid)
-    term ``width^2 / 12 (d|s|_0 - d|s|_1)`` times the dexterous fraction (continuous)."""
-    f_pos, i_pos = _above(s0, s1, limit)
-    f_neg, i_neg = _above(-s0, -s1, limit)
-    fraction = 1.0 if limit <= 0.0 else f_pos + f_neg
-    integral = (i_pos + i_neg) * width
-    if s0 * s1 > 0.0:
-        sign = 1.0 if s0 > 0.0 else -1.0
-        integral += fraction * width * width / 12.0 * sign * (d0 - d1)
-    return fraction * width, integral
-
-
-@kernels.jit
-def _rpr3_x_sections(ys, phis, base, platform, rho_min, rho_max, angular_scale, origin, step, limit):
-    """Exact x-sections of the 3-RPR workspace (see :meth:`RPR3.exact_sections`)."""
-    count = ys.shape[0]
-    measure = np.zeros(count)
-    integral = np.zeros(count)
-    ic_min = np.full(count, np.inf)
-    ic_max = np.full(count, -np.inf)
-    evaluated = 0
-    centre_x, centre_y, arm_x, arm_y = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
-    lo, hi, lo2, hi2 = np.empty(8), np.empty(8), np.empty(8), np.empty(8)
-    outer2, inner2 = rho_max * rho_max, rho_min * rho_min
-    delta = 1e-6 * step  # forward difference of the x-derivative
-    for p in range(count):
-        y = ys[p]
-        c, s = math.cos(phis[p]), math.sin(phis[p])
-        left, right = -np.inf, np.inf
-        for i in range(3):
-            arm_x[i] = c * platform[i, 0] - s * platform[i, 1]
-            arm_y[i] = s * platform[i, 0] + c * platform[i, 1]
-            centre_x[i] = base[i, 0] - arm_x[i]
-            centre_y[i] = base[i, 1] - arm_y[i]
-            b = y - centre_y[i]
-            w2 = outer2 - b * b
-            if w2 < 0.0:
-                left, right = 1.0, 0.0
-                break
-            w = math.sqrt(w2)
-            left, right = max(left, centre_x[i] - w), min(right, centre_x[i] + w)
-        if not right > left:
-            continue
-        n = 1
-        lo[0], hi[0] = left, right
-        for i in range(3):  # remove the inner discs (|L_i| < rho_min)
-            b = y - centre_y[i]
-            w2 = inner2 - b * b
-            if w2 <= 0.0:
-                continue
-            w = math.sqrt(w2)
-            hole_lo, hole_hi = centre_x[i] - w, centre_x[i] + w
-            k = 0
-            for j in range(n):
-                if hole_hi <= lo[j] or hole_lo >= hi[j]:
-                    lo2[k], hi2[k] = lo[j], hi[j]
-                    k += 1
-                    continue
-                if hole_lo > lo[j]:
-                    lo2[k], hi2[k] = lo[j], hole_lo
-                    k += 1
-                if hole_hi < hi[j]:
-                    lo2[k], hi2[k] = hole_hi, hi[j]
-                    k += 1
-            n = k
-            for j in range(n):
-                lo[j], hi[j] = lo2[j], hi2[j]
-        total, weighted = 0.0, 0.0
-        for j in range(n):
-            end = hi[j]
-            xa = lo[j]
-            sa = _signed_inverse_condition_at(xa, y, centre_x, centre_y, arm_x, arm_y, angular_scale)
-            da = (
-                _signed_inverse_condition_at(xa + delta, y, centre_x, centre_y, arm_x, arm_y, angular_scale) - sa
-            ) / delta
-            evaluated += 2
-            k = math.floor((xa - origin) / step) + 1
-            while True:
-                xb = min(origin + k * step, end)
-                sb = _signed_inverse_condition_at(xb, y, centre_x, centre_y, arm_x, arm_y, angular_scale)
-                db = (
-                    sb - _signed_inverse_condition_at(xb - delta, y, centre_x, centre_y, arm_x, arm_y, angular_scale)
-                ) / delta
-                evaluated += 2
-                if abs(sb) > limit:
-                    ic_min[p], ic_max[p] = min(ic_min[p], abs(sb)), max(ic_max[p], abs(sb))
-                xc, sc, dc = xa, sa, da
-                if limit > 0.0:
-                    # the limit's crossings by linear interpolation become samples too
-                    t1, t2 = 2.0, 2.0
-                    for level in (limit, -limit):
-                        if (sa - level) * (sb - level) < 0.0:
-                            t = (sa - level) / (sa - sb)
-                            if t1 > 1.0:
-                                t1 = t
-                            else:
-                                t2 = t
-                    if t2 < t1:
-                        t1, t2 = t2, t1
-                    for t in (t1, t2):
-                        if t < 1.0:
-                            xt = xa + t * (xb - xa)
-                            st = _signed_inverse_condition_at(xt, y, centre_x, centre_y, arm_x, arm_y, angular_scale)
-                            dt = (
-                                _signed_inverse_condition_at(
-                                    xt + delta, y, centre_x, centre_y, arm_x, arm_y, angular_scale
-                                )
-                                - st
-                            ) / delta
-                            evaluated += 2
-                            dm, di = _segment(sc, st, dc, dt, limit, xt - xc)
-                            total += dm
-                            weighted += di
-                            xc, sc, dc = xt, st, dt
-                dm, di = _segment(sc, sb, dc, db, limit, xb - xc)
-                total += dm
-                weighted += di
-                if xb >= end:
-                    break
-                xa, sa, da = xb, sb, db
-                k += 1
-        measure[p], integral[p] = total, weighted
-    return measure, integral, ic_min, ic_max, evaluated

@@ -43,8 +43,9 @@ becomes that check's line, ``"<check>: raised <Type>: <message>"``):
     gives the numpy reference's margins.
 ``workspace``
     The centre design's workspace (:func:`kinematics.workspace.evaluate` at
-    ``min_resolution``) is not empty, and the compiled path, if the class
-    has one, gives the numpy reference's volume and GDI.
+    ``min_resolution``) is not empty, the compiled path, if the class
+    has one, gives the numpy reference's volume and GDI on the cell grid, and
+    exact sections, if the class has them, agree with the cell grid.
 ``design-variables``
     Moving each design variable (others at the centre) changes the volume,
     GDI or SURI.
@@ -77,6 +78,9 @@ SINGULAR_IC = 1e-3
 ACTS_RTOL = 1e-6
 #: compiled and numpy paths must give the same V and GDI to this relative tolerance
 COMPILED_RTOL = 1e-9
+#: a mechanism's exact sections and the cell grid (two independent integrations of the same
+#: workspace, at the coarsest accepted resolution) must agree in V, GDI and SURI to this
+SECTIONS_RTOL = 0.02
 
 
 class _Stop(Exception):
@@ -412,8 +416,10 @@ def _check_margins(mech: Mechanism, poses: np.ndarray) -> list[str]:
     return out
 
 
-def _evaluation(mech: Mechanism, resolution: int) -> np.ndarray:
-    ev = evaluate(mech, resolution=resolution, error_estimate=False)
+def _evaluation(mech: Mechanism, resolution: int, cells: bool = False) -> np.ndarray:
+    """(V, GDI, SURI) by ``evaluate``; ``cells``: on the cut-cell grid even where the mechanism
+    has exact sections (``return_samples`` takes the grid, whose samples are the plot's)."""
+    ev = evaluate(mech, resolution=resolution, error_estimate=False, return_samples=cells)
     return np.array([ev.volume, ev.gdi, ev.suri])
 
 
@@ -424,12 +430,19 @@ def _check_workspace(mech: Mechanism, resolution: int) -> tuple[np.ndarray, list
             f"workspace: the centre design's workspace is empty at resolution {resolution} "
             f"(volume {values[0]:g} {mech.volume_unit()})"
         )
+    sections = mech.section_axis is not None
+    grid = _evaluation(mech, resolution, cells=True) if sections else values
     with kernels.reference_kernels():
-        reference = _evaluation(mech, resolution)
-    if not np.allclose(values, reference, rtol=COMPILED_RTOL, atol=0.0):
+        reference = _evaluation(mech, resolution, cells=sections)
+    if not np.allclose(grid, reference, rtol=COMPILED_RTOL, atol=0.0):
         return values, [
-            f"workspace: the compiled path gives (V, GDI, SURI) {_fmt(values)}, the numpy reference "
+            f"workspace: the compiled path gives (V, GDI, SURI) {_fmt(grid)}, the numpy reference "
             f"{_fmt(reference)} (resolution {resolution})"
+        ]
+    if sections and not np.allclose(values, grid, rtol=SECTIONS_RTOL, atol=0.0):
+        return values, [
+            f"workspace: the exact sections give (V, GDI, SURI) {_fmt(values)}, the cell grid "
+            f"{_fmt(grid)} (resolution {resolution}; allowed relative difference {SECTIONS_RTOL:g})"
         ]
     return values, []
 

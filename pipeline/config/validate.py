@@ -24,7 +24,7 @@ from pipeline.optimizers import OPTIMIZERS
 #: conservative grid throughput (nodes/s per worker) for the run-time estimate (midpoint count)
 NODES_PER_SECOND = 1.0e6
 #: cost of a grid node relative to the midpoint count's, per ``evaluate.method``: the grid method's
-#: boundary cells (coarse pass, bisections, cut-cell fractions) cost 1.9x (2-RPR) to 4.7x (Delta)
+#: boundary cells (coarse pass, bisections, cut-cell fractions) cost 2x (Tricept) to 5x (H4)
 #: per node at the mechanisms' default resolutions (docs/accuracy.md, "Measured")
 METHOD_COST = {"midpoint": 1.0, "grid": 5.0}
 
