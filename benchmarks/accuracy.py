@@ -350,7 +350,7 @@ def phases(name: str) -> dict[str, float] | None:
     rest: the grid's nodes). The profiler slows Python more than the compiled kernels, so each
     phase is its share of the fastest of :data:`REPEATS` profiled runs times the unprofiled
     evaluation (``total``, timed alternately with the old default, ``old``, as in the ladder).
-    None where the new method is not a grid (3-RPR: sections)."""
+    None where the new method is not a grid (3-RPR, 2-RPR: sections)."""
     mech = get_mechanism(name, **PAPER[name])
     evaluate(mech, error_estimate=False)  # compile, warm
     best = None

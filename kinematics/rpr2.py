@@ -91,6 +91,8 @@ class RPR2(Mechanism):
         (:func:`~kinematics.annuli.annuli_x_sections`, which also integrates ``1/kappa`` along
         them: signed, ``sign(det J) / kappa`` of :func:`_rpr2_signed_inverse_condition`).
 
+        Returns what :meth:`~kinematics.base.Mechanism.exact_sections` states (lengths in mm).
+
         Parameters
         ----------
         poses : ndarray, shape (N, 2)
@@ -101,19 +103,6 @@ class RPR2(Mechanism):
             Dexterity limit on ``1/kappa`` (0: none).
         length : float, optional
             Unused: the 2-RPR's Jacobian has no angular column.
-
-        Returns
-        -------
-        measure : ndarray, shape (N,)
-            Length (mm) of the dexterous section.
-        reach : ndarray, shape (N,)
-            Length (mm) of the reachable section (whatever ``1/kappa``).
-        integral : ndarray, shape (N,)
-            Integral of ``1/kappa`` over it (mm).
-        ic_min, ic_max : ndarray, shape (N,)
-            Extremes of ``1/kappa`` over its samples (inf / -inf for an empty section).
-        evaluated : int
-            Jacobians evaluated (the cost).
         """
         poses = self._check_poses(poses)
         if not step > 0:

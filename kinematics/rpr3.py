@@ -183,6 +183,8 @@ class RPR3(Mechanism):
         integrated by the corrected trapezoid rule (cubic Hermite). Every quantity moves
         continuously with the design and the pose.
 
+        Returns what :meth:`~kinematics.base.Mechanism.exact_sections` states (lengths in mm).
+
         Parameters
         ----------
         poses : ndarray, shape (N, 3)
@@ -194,19 +196,6 @@ class RPR3(Mechanism):
         length : float, optional
             Characteristic length (mm) homogenising the Jacobian (default
             :attr:`characteristic_length`).
-
-        Returns
-        -------
-        measure : ndarray, shape (N,)
-            Length (mm) of the dexterous section.
-        reach : ndarray, shape (N,)
-            Length (mm) of the reachable section (whatever ``1/kappa``).
-        integral : ndarray, shape (N,)
-            Integral of ``1/kappa`` over it (mm).
-        ic_min, ic_max : ndarray, shape (N,)
-            Extremes of ``1/kappa`` over its samples (inf / -inf for an empty section).
-        evaluated : int
-            Jacobians evaluated (the cost).
         """
         poses = self._check_poses(poses)
         if not step > 0:
