@@ -129,9 +129,11 @@ is `docs/figures/accuracy_convergence.png`.
    sharp corners (annuli meeting at grazing angles, narrower than a cell) one plane per cell
    could not hold (3-RPR: 0.56 % at 32^3 on a random design before; 2-RPR: 0.18 % at 400^2 on
    the scan's worst design). Where the reachable volume is known in closed form (2-RPR:
-   `RPR2.exact_area`, `Mechanism.exact_volume`), V is that volume less the sections'
-   non-dexterous part, so that the rule across the sections errs only on the dexterity limit's
-   band, and the GDI stays the ratio of two sums on the same rows (their errors cancel).
+   `RPR2.exact_area`, `Mechanism.exact_volume`), V is that volume times the sections'
+   dexterous share (dexterous length over reachable length, summed over the rows): where the
+   dexterity limit cuts the workspace inside (the default limit's band), the error of the rule
+   across the sections falls out of V, elsewhere it is at most the sections' own; the GDI stays
+   the ratio of two sums on the same rows (their errors cancel).
 
 **Order.** Exact for a planar boundary; for a smooth boundary the plane through the crossings is
 second-order accurate (the crossings are on the boundary to third order), so the volume error is

@@ -140,7 +140,7 @@ def _segment(s0, s1, d0, d1, limit, width):
     return fraction * width, integral
 
 
-@kernels.jit
+@kernels.inline_jit
 def annuli_x_sections(ys, centres_x, centres_y, rho_min, rho_max, signed_ic, row_args, origin, step, limit):
     """Exact sections along x of intersections of annuli, and ``1/kappa`` integrated along them.
 
@@ -154,7 +154,9 @@ def annuli_x_sections(ys, centres_x, centres_y, rho_min, rho_max, signed_ic, row
     x-derivative (a difference over ``1e-6 step``); the dexterous part ``|s| > limit`` is cut
     where the linear interpolant of s meets the limit (each such crossing is sampled too), and
     ``|s|`` is integrated by the corrected trapezoid rule (cubic Hermite, :func:`_segment`).
-    Every quantity moves continuously with the centres and ``y``.
+    Every quantity moves continuously with the centres and ``y``. Inlined into a kernel per
+    mechanism that names its ``signed_ic`` (:data:`kinematics.kernels.inline_jit`: so that the
+    mechanism's kernel is cached on disk).
 
     Parameters
     ----------

@@ -9,6 +9,9 @@ matrix in registers does the same arithmetic ~5-10x faster on one core.
 The numpy path stays the reference: ``PM_DESIGN_KERNELS=numpy`` in the
 environment (or :func:`reference_kernels` in code) turns every compiled path
 off, and the tests compare the two (same V and GDI to 1e-12 relative). The
+planar mechanisms' exact sections (:func:`kinematics.annuli.annuli_x_sections`)
+are compiled only: they have no numpy twin, and the conformance harness checks
+them against the cell grid instead. The
 kernels are serial and free of reductions whose order depends on threads, so
 results do not depend on the number of joblib workers.
 
@@ -40,7 +43,10 @@ jit = numba.njit(cache=True, nogil=True)
 #: vectorises it (4 poses per AVX2 instruction). The results are the same IEEE operations.
 vector_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 #: the same for small helpers of a kernel, inlined into their caller by numba itself
-#: (a plain call into them keeps LLVM from optimising across it: ~1.6x slower loops)
+#: (a plain call into them keeps LLVM from optimising across it: ~1.6x slower loops); also for a
+#: kernel that takes a compiled function as an argument, which each caller then calls
+#: statically (passed at run time, the function's address would keep the caller out of the
+#: on-disk cache: numba cannot cache code holding a dynamic address)
 inline_jit = numba.njit(cache=True, nogil=True, inline="always")
 
 #: Laguerre steps of both paths (see :mod:`kinematics.conditioning`)

@@ -108,13 +108,12 @@ class RPR2(Mechanism):
         if not step > 0:
             raise ValueError(f"RPR2.exact_sections: step must be > 0 (mm); got {step!r}")
         rows = len(poses)
-        return annuli_x_sections(
+        return _rpr2_x_sections(
             np.ascontiguousarray(poses[:, 1]),
             np.ascontiguousarray(np.broadcast_to(self.base[:, 0], (rows, 2))),
             np.ascontiguousarray(np.broadcast_to(self.base[:, 1], (rows, 2))),
             self.q_min,
             self.q_max,
-            _rpr2_signed_inverse_condition,
             np.full((rows, 1), self.b),
             float(origin),
             float(step),
@@ -233,3 +232,12 @@ def _rpr2_signed_inverse_condition(x, y, args):
     q2 = math.sqrt((x - b) * (x - b) + y * y)
     det = b * y / (q1 * q2)
     return det / (1.0 + math.sqrt(max(1.0 - det * det, 0.0)))
+
+
+@kernels.jit
+def _rpr2_x_sections(ys, centres_x, centres_y, q_min, q_max, row_args, origin, step, limit):
+    """:func:`~kinematics.annuli.annuli_x_sections` with the 2-RPR's signed ``1/kappa``
+    (:func:`_rpr2_signed_inverse_condition`): a kernel of its own, so that it is cached on disk."""
+    return annuli_x_sections(
+        ys, centres_x, centres_y, q_min, q_max, _rpr2_signed_inverse_condition, row_args, origin, step, limit
+    )

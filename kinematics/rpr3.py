@@ -207,13 +207,12 @@ class RPR3(Mechanism):
         row_args = np.ascontiguousarray(
             np.concatenate([centres[..., 0], centres[..., 1], arms[..., 0], arms[..., 1], scale], axis=1)
         )
-        return annuli_x_sections(
+        return _rpr3_x_sections(
             np.ascontiguousarray(poses[:, 1]),
             np.ascontiguousarray(centres[..., 0]),
             np.ascontiguousarray(centres[..., 1]),
             self.rho_min,
             self.rho_max,
-            _signed_inverse_condition_at,
             row_args,
             float(origin),
             float(step),
@@ -488,3 +487,12 @@ def _signed_inverse_condition_at(x, y, args):
         r[3 * i + 1] = leg_y / rho
         r[3 * i + 2] = (args[6 + i] * leg_y - args[9 + i] * leg_x) / rho * args[12]
     return _signed_inverse_condition_3x3(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8])
+
+
+@kernels.jit
+def _rpr3_x_sections(ys, centres_x, centres_y, rho_min, rho_max, row_args, origin, step, limit):
+    """:func:`~kinematics.annuli.annuli_x_sections` with the 3-RPR's signed ``1/kappa``
+    (:func:`_signed_inverse_condition_at`): a kernel of its own, so that it is cached on disk."""
+    return annuli_x_sections(
+        ys, centres_x, centres_y, rho_min, rho_max, _signed_inverse_condition_at, row_args, origin, step, limit
+    )

@@ -51,7 +51,7 @@ A mechanism that provides exact 1-D sections (:meth:`~kinematics.base.Mechanism.
 (:func:`_integrate_sections`): each section's intervals in closed form, ``1/kappa`` by the
 corrected trapezoid rule along it, a sheared midpoint rule across (y, phi); where the mechanism
 also knows its reachable volume in closed form (:meth:`~kinematics.base.Mechanism.exact_volume`,
-2-RPR), V is that less the sections' non-dexterous part.
+2-RPR), V is that times the dexterous share of the sections.
 ``method="polar"`` is the Tricept paper's boundary search (seed 001 Sec. 4.1).
 
 Default orientation ranges (``orientation=None``) are the mechanism's
@@ -1493,10 +1493,13 @@ def _integrate_sections(mechanism, resolution, orientation, min_ic, length):
     else:
         stats = (0.0, 0.0, 0.0)
     exact = mechanism.exact_volume(orientation)
-    if exact is not None:
-        # the reachable volume in closed form less the sections' non-dexterous part: V then carries
-        # no error of the rule across the sections where they shrink to nothing (h^1.5, irregular)
-        volume = max(float(exact) - float((reach - measure).sum()) * cell, 0.0)
+    reachable = float(reach.sum())
+    if exact is not None and reachable > 0:
+        # the reachable volume in closed form times the dexterous share of the sections: the error
+        # of the rule across the sections where they shrink to nothing (h^1.5, irregular) falls
+        # out of V where the dexterity limit cuts the workspace inside (the default's band), and
+        # is at most the sections' own elsewhere; 0 where nothing is dexterous
+        volume = float(exact) * float(measure.sum()) / reachable
     return volume, stats, int(evaluated), int(inside.sum()), None
 
 
