@@ -111,6 +111,76 @@ def annuli_intersection_area(centres: np.ndarray, r_in: np.ndarray, r_out: np.nd
 
 # ----------------------------------------------------- exact x-sections
 @kernels.inline_jit
+def _signed_inverse_condition_3x3(r00, r01, r02, r10, r11, r12, r20, r21, r22):
+    """``sign(det J) sigma_min / sigma_max`` of a 3 x 3 matrix J given by rows.
+
+    The eigenvalues of ``G = J^T J`` in closed form (the trigonometric solution of the
+    symmetric 3 x 3 eigenproblem); the smallest as ``det(J)^2 / (lambda_1 lambda_2)``, which
+    keeps its relative accuracy near a singularity. The sign makes the value smooth through
+    a singularity (``det J`` changes sign there): linear interpolation then places the
+    dexterity limit on either side of it.
+    """
+    det = r00 * (r11 * r22 - r12 * r21) - r01 * (r10 * r22 - r12 * r20) + r02 * (r10 * r21 - r11 * r20)
+    g00 = r00 * r00 + r10 * r10 + r20 * r20
+    g11 = r01 * r01 + r11 * r11 + r21 * r21
+    g22 = r02 * r02 + r12 * r12 + r22 * r22
+    g01 = r00 * r01 + r10 * r11 + r20 * r21
+    g02 = r00 * r02 + r10 * r12 + r20 * r22
+    g12 = r01 * r02 + r11 * r12 + r21 * r22
+    q = (g00 + g11 + g22) / 3.0
+    d0, d1, d2 = g00 - q, g11 - q, g22 - q
+    p2 = d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * (g01 * g01 + g02 * g02 + g12 * g12)
+    if p2 <= 0.0:
+        return 1.0 if det >= 0.0 else -1.0
+    p = math.sqrt(p2 / 6.0)
+    b00, b11, b22, b01, b02, b12 = d0 / p, d1 / p, d2 / p, g01 / p, g02 / p, g12 / p
+    half_det = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) + b02 * (b01 * b12 - b11 * b02))
+    angle = math.acos(min(max(half_det, -1.0), 1.0)) / 3.0
+    lam1 = q + 2.0 * p * math.cos(angle)
+    lam3 = q + 2.0 * p * math.cos(angle + 2.0 * math.pi / 3.0)
+    lam2 = 3.0 * q - lam1 - lam3
+    if not lam1 > 0.0:
+        return 0.0
+    lam_min = det * det / (lam1 * lam2) if lam2 > 0.0 else max(lam3, 0.0)
+    ratio = math.sqrt(min(lam_min / lam1, 1.0))
+    return ratio if det >= 0.0 else -ratio
+
+
+@kernels.inline_jit
+def planar_legs_signed_inverse_condition(x, y, centres_x, centres_y, arms_x, arms_y, angular_scale):
+    """Signed inverse condition number ``sign(det J) sigma_min / sigma_max`` of the Jacobian of
+    planar RPR legs at the point (x, y) (mm) whose legs run from the annulus centres
+    ``(centres_x[i], centres_y[i])``: ``L_i = (x, y) - c_i``, one row per leg.
+
+    * 3 legs (3-RPR, pose (x, y, phi); seed 003 eq. 12-14 and the Jacobian of
+      :meth:`kinematics.rpr3.RPR3._jacobian`): rows ``(L_i / |L_i|, (a_i x L_i) / |L_i| s)``,
+      ``a_i`` the arm ``Rot(phi) B'_i`` (``arms_x``, ``arms_y``) and ``s`` the angular scale
+      (mm, the characteristic length homogenising phi); 3 x 3 by
+      :func:`_signed_inverse_condition_3x3`.
+    * 2 legs (2-RPR, pose (x, y); seed 004 eq. 1-2): unit rows ``L_i / |L_i|``, so
+      ``sigma_1^2 + sigma_2^2 = 2`` and ``sigma_1 sigma_2 = |D|``, ``D = det J``:
+      ``1/kappa = |D| / (1 + sqrt(1 - D^2))`` (arms and scale unused).
+
+    The sign makes the value smooth through a singularity (``det J`` changes sign there).
+    """
+    if centres_x.shape[0] == 2:
+        rx0, ry0 = x - centres_x[0], y - centres_y[0]
+        rx1, ry1 = x - centres_x[1], y - centres_y[1]
+        q0 = math.sqrt(rx0 * rx0 + ry0 * ry0)
+        q1 = math.sqrt(rx1 * rx1 + ry1 * ry1)
+        det = (rx0 * ry1 - ry0 * rx1) / (q0 * q1)
+        return det / (1.0 + math.sqrt(max(1.0 - det * det, 0.0)))
+    r = np.empty(9)
+    for i in range(3):
+        leg_x, leg_y = x - centres_x[i], y - centres_y[i]
+        rho = math.sqrt(leg_x * leg_x + leg_y * leg_y)
+        r[3 * i] = leg_x / rho
+        r[3 * i + 1] = leg_y / rho
+        r[3 * i + 2] = (arms_x[i] * leg_y - arms_y[i] * leg_x) / rho * angular_scale
+    return _signed_inverse_condition_3x3(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8])
+
+
+@kernels.inline_jit
 def _above(s0, s1, level):
     """Part of a segment where the linear interpolant of s (from s0 to s1) exceeds ``level``:
     ``(fraction, integral of s over it per unit length)``."""
@@ -140,38 +210,38 @@ def _segment(s0, s1, d0, d1, limit, width):
     return fraction * width, integral
 
 
-@kernels.inline_jit
-def annuli_x_sections(ys, centres_x, centres_y, rho_min, rho_max, signed_ic, row_args, origin, step, limit):
-    """Exact sections along x of intersections of annuli, and ``1/kappa`` integrated along them.
+@kernels.jit
+def annuli_x_sections(ys, centres_x, centres_y, arms_x, arms_y, rho_min, rho_max, angular_scale, origin, step, limit):
+    """Exact sections along x of intersections of annuli (planar RPR legs), and ``1/kappa``
+    integrated along them.
 
     Row p (at ``y = ys[p]``) is the set of x with ``rho_min <= |(x, y) - c_pi| <= rho_max`` for
     every centre ``c_pi = (centres_x[p, i], centres_y[p, i])`` (a planar RPR leg per annulus:
     seed 003 eq. 12-14, seed 004 eq. 1-2): the intersection of the outer discs' chords, an
     interval, minus the inner discs' chords, in closed form (at most ``m + 1`` intervals for m
-    annuli). Along each interval the signed inverse condition number
-    ``s = signed_ic(x, y, row_args[p])`` (``sign(det J) / kappa``, smooth through a singularity)
-    is sampled at the interval's ends and at the nodes ``origin + k step`` inside it, with its
-    x-derivative (a difference over ``1e-6 step``); the dexterous part ``|s| > limit`` is cut
-    where the linear interpolant of s meets the limit (each such crossing is sampled too), and
-    ``|s|`` is integrated by the corrected trapezoid rule (cubic Hermite, :func:`_segment`).
-    Every quantity moves continuously with the centres and ``y``. Inlined into a kernel per
-    mechanism that names its ``signed_ic`` (:data:`kinematics.kernels.inline_jit`: so that the
-    mechanism's kernel is cached on disk).
+    annuli). Along each interval the signed inverse condition number s of the legs' Jacobian
+    (:func:`planar_legs_signed_inverse_condition`, with the row's arms and ``angular_scale``;
+    ``sign(det J) / kappa``, smooth through a singularity) is sampled at the interval's ends and
+    at the nodes ``origin + k step`` inside it, with its x-derivative (a difference over
+    ``1e-6 step``); the dexterous part ``|s| > limit`` is cut where the linear interpolant of s
+    meets the limit (each such crossing is sampled too), and ``|s|`` is integrated by the
+    corrected trapezoid rule (cubic Hermite, :func:`_segment`). Every quantity moves
+    continuously with the centres and ``y``.
 
     Parameters
     ----------
     ys : ndarray, shape (N,)
-        The rows' y (length unit of the mechanism, e.g. mm).
+        The rows' y (mm).
     centres_x, centres_y : ndarray, shape (N, m)
-        Annulus centres per row (same unit).
+        Annulus centres per row (mm); m = 3 (3-RPR) or 2 (2-RPR).
+    arms_x, arms_y : ndarray, shape (N, m)
+        The legs' platform arms per row (mm; 3-RPR: ``Rot(phi) B'_i``; unused for m = 2).
     rho_min, rho_max : float
-        Inner and outer radius of every annulus (the leg range).
-    signed_ic : compiled function ``(x, y, args) -> float``
-        Signed ``1/kappa`` at (x, y) of the row whose arguments are ``args`` (1-D float array).
-    row_args : ndarray, shape (N, k)
-        Per-row arguments of ``signed_ic``.
+        Inner and outer radius of every annulus (the leg range, mm).
+    angular_scale : float
+        Homogenising length of the angular column (mm; unused for m = 2).
     origin, step : float
-        Sample nodes along x, ``step > 0``.
+        Sample nodes along x (mm), ``step > 0``.
     limit : float
         Dexterity limit on ``|s|`` (0: none).
 
@@ -182,7 +252,7 @@ def annuli_x_sections(ys, centres_x, centres_y, rho_min, rho_max, signed_ic, row
         ``1/kappa``), the integral of ``1/kappa`` over the dexterous one, the extremes of
         ``1/kappa`` over its samples (inf / -inf for an empty section).
     evaluated : int
-        Evaluations of ``signed_ic`` (the cost).
+        Evaluations of ``1/kappa`` (the cost).
     """
     count, legs = centres_x.shape
     measure = np.zeros(count)
@@ -197,7 +267,7 @@ def annuli_x_sections(ys, centres_x, centres_y, rho_min, rho_max, signed_ic, row
     delta = 1e-6 * step  # forward difference of the x-derivative
     for p in range(count):
         y = ys[p]
-        args = row_args[p]
+        c_x, c_y, a_x, a_y = centres_x[p], centres_y[p], arms_x[p], arms_y[p]
         left, right = -np.inf, np.inf
         for i in range(legs):
             b = y - centres_y[p, i]
@@ -238,14 +308,16 @@ def annuli_x_sections(ys, centres_x, centres_y, rho_min, rho_max, signed_ic, row
             reach[p] += hi[j] - lo[j]
             end = hi[j]
             xa = lo[j]
-            sa = signed_ic(xa, y, args)
-            da = (signed_ic(xa + delta, y, args) - sa) / delta
+            sa = planar_legs_signed_inverse_condition(xa, y, c_x, c_y, a_x, a_y, angular_scale)
+            da = (planar_legs_signed_inverse_condition(xa + delta, y, c_x, c_y, a_x, a_y, angular_scale) - sa) / delta
             evaluated += 2
             k = math.floor((xa - origin) / step) + 1
             while True:
                 xb = min(origin + k * step, end)
-                sb = signed_ic(xb, y, args)
-                db = (sb - signed_ic(xb - delta, y, args)) / delta
+                sb = planar_legs_signed_inverse_condition(xb, y, c_x, c_y, a_x, a_y, angular_scale)
+                db = (
+                    sb - planar_legs_signed_inverse_condition(xb - delta, y, c_x, c_y, a_x, a_y, angular_scale)
+                ) / delta
                 evaluated += 2
                 if abs(sb) > limit:
                     ic_min[p], ic_max[p] = min(ic_min[p], abs(sb)), max(ic_max[p], abs(sb))
@@ -265,8 +337,11 @@ def annuli_x_sections(ys, centres_x, centres_y, rho_min, rho_max, signed_ic, row
                     for t in (t1, t2):
                         if t < 1.0:
                             xt = xa + t * (xb - xa)
-                            st = signed_ic(xt, y, args)
-                            dt = (signed_ic(xt + delta, y, args) - st) / delta
+                            st = planar_legs_signed_inverse_condition(xt, y, c_x, c_y, a_x, a_y, angular_scale)
+                            dt = (
+                                planar_legs_signed_inverse_condition(xt + delta, y, c_x, c_y, a_x, a_y, angular_scale)
+                                - st
+                            ) / delta
                             evaluated += 2
                             dm, di = _segment(sc, st, dc, dt, limit, xt - xc)
                             total += dm

@@ -357,8 +357,8 @@ class Mechanism(ABC):
     def exact_volume(self, orientation: tuple[float, float]) -> float | None:
         """Optional closed-form volume of the reachable workspace (no dexterity limit) over the
         whole pose box at ``orientation`` (rad), in :meth:`volume_unit`; ``None`` (the default):
-        not known. With :meth:`exact_sections`, ``evaluate(method="grid")`` takes V as it times
-        the sections' dexterous share (2-RPR: :meth:`kinematics.rpr2.RPR2.exact_area`)."""
+        not known. With :meth:`exact_sections`, ``evaluate(method="grid")`` takes V as this
+        volume times the sections' dexterous share (2-RPR: :meth:`kinematics.rpr2.RPR2.exact_area`)."""
         return None
 
     def volume_unit(self, orientation: tuple[float, float] | None = None, fixed: dict[str, float] | None = None) -> str:

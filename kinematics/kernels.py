@@ -43,10 +43,10 @@ jit = numba.njit(cache=True, nogil=True)
 #: vectorises it (4 poses per AVX2 instruction). The results are the same IEEE operations.
 vector_jit = numba.njit(cache=True, nogil=True, error_model="numpy")
 #: the same for small helpers of a kernel, inlined into their caller by numba itself
-#: (a plain call into them keeps LLVM from optimising across it: ~1.6x slower loops); also for a
-#: kernel that takes a compiled function as an argument, which each caller then calls
-#: statically (passed at run time, the function's address would keep the caller out of the
-#: on-disk cache: numba cannot cache code holding a dynamic address)
+#: (a plain call into them keeps LLVM from optimising across it: ~1.6x slower loops). numba
+#: checks a cached kernel against its own file only: a kernel that inlines helpers of another
+#: module is not recompiled when that module changes, so every kernel calls compiled helpers of
+#: its own module only
 inline_jit = numba.njit(cache=True, nogil=True, inline="always")
 
 #: Laguerre steps of both paths (see :mod:`kinematics.conditioning`)

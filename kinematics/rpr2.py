@@ -88,8 +88,8 @@ class RPR2(Mechanism):
 
         At fixed y leg i gives ``q_min^2 <= (x - O_ix)^2 + y^2 <= q_max^2`` (eq. 1-2): the
         intersection of two annuli around O_1, O_2, at most three intervals of x, in closed form
-        (:func:`~kinematics.annuli.annuli_x_sections`, which also integrates ``1/kappa`` along
-        them: signed, ``sign(det J) / kappa`` of :func:`_rpr2_signed_inverse_condition`).
+        (:func:`~kinematics.annuli.annuli_x_sections`, which also integrates ``1/kappa`` of the
+        Jacobian of eq. 1-2 along them, signed: ``sign(det J) / kappa``).
 
         Returns what :meth:`~kinematics.base.Mechanism.exact_sections` states (lengths in mm).
 
@@ -107,14 +107,16 @@ class RPR2(Mechanism):
         poses = self._check_poses(poses)
         if not step > 0:
             raise ValueError(f"RPR2.exact_sections: step must be > 0 (mm); got {step!r}")
-        rows = len(poses)
-        return _rpr2_x_sections(
+        zeros = np.zeros((len(poses), 2))  # no angular column: the legs' arms do not enter
+        return annuli_x_sections(
             np.ascontiguousarray(poses[:, 1]),
-            np.ascontiguousarray(np.broadcast_to(self.base[:, 0], (rows, 2))),
-            np.ascontiguousarray(np.broadcast_to(self.base[:, 1], (rows, 2))),
+            np.ascontiguousarray(np.broadcast_to(self.base[:, 0], zeros.shape)),
+            np.ascontiguousarray(np.broadcast_to(self.base[:, 1], zeros.shape)),
+            zeros,
+            zeros,
             self.q_min,
             self.q_max,
-            np.full((rows, 1), self.b),
+            0.0,
             float(origin),
             float(step),
             float(min_inverse_condition),
@@ -216,28 +218,3 @@ def _rpr2_reachable_jacobians(poses, b, q_min, q_max, column_scale):
         out[p, 1, 0] = (x - b) / q2 * column_scale[0]
         out[p, 1, 1] = y / q2 * column_scale[1]
     return out
-
-
-@kernels.inline_jit
-def _rpr2_signed_inverse_condition(x, y, args):
-    """Signed ``1/kappa`` at P = (x, y) (mm) of the Jacobian of eq. 1-2, rows ``u_i = (P - O_i) / q_i``
-    (unit vectors; ``args = (b,)``, O_1 = (0, 0), O_2 = (b, 0)).
-
-    With unit rows ``sigma_1^2 + sigma_2^2 = 2`` and ``sigma_1 sigma_2 = |D|``, ``D = det J = b y /
-    (q_1 q_2)``, so ``1/kappa = sigma_2 / sigma_1 = |D| / (1 + sqrt(1 - D^2))``; the sign of D
-    keeps it smooth through the singular line y = 0 (both legs along the x axis).
-    """
-    b = args[0]
-    q1 = math.sqrt(x * x + y * y)
-    q2 = math.sqrt((x - b) * (x - b) + y * y)
-    det = b * y / (q1 * q2)
-    return det / (1.0 + math.sqrt(max(1.0 - det * det, 0.0)))
-
-
-@kernels.jit
-def _rpr2_x_sections(ys, centres_x, centres_y, q_min, q_max, row_args, origin, step, limit):
-    """:func:`~kinematics.annuli.annuli_x_sections` with the 2-RPR's signed ``1/kappa``
-    (:func:`_rpr2_signed_inverse_condition`): a kernel of its own, so that it is cached on disk."""
-    return annuli_x_sections(
-        ys, centres_x, centres_y, q_min, q_max, _rpr2_signed_inverse_condition, row_args, origin, step, limit
-    )

@@ -200,20 +200,14 @@ class RPR3(Mechanism):
         poses = self._check_poses(poses)
         if not step > 0:
             raise ValueError(f"RPR3.exact_sections: step must be > 0 (mm); got {step!r}")
-        phi = poses[:, 2]
-        arms = self._rotated_platform(phi)  # (N, 3, 2): Rot(phi) B'_i
+        arms = self._rotated_platform(poses[:, 2])  # (N, 3, 2): Rot(phi) B'_i
         centres = self.base - arms  # c_i = A_i - Rot(phi) B'_i (eq. 12-14)
-        scale = np.full((len(poses), 1), float(self.angular_scale(length)[2]))
-        row_args = np.ascontiguousarray(
-            np.concatenate([centres[..., 0], centres[..., 1], arms[..., 0], arms[..., 1], scale], axis=1)
-        )
-        return _rpr3_x_sections(
+        return annuli_x_sections(
             np.ascontiguousarray(poses[:, 1]),
-            np.ascontiguousarray(centres[..., 0]),
-            np.ascontiguousarray(centres[..., 1]),
+            *(np.ascontiguousarray(a) for a in (centres[..., 0], centres[..., 1], arms[..., 0], arms[..., 1])),
             self.rho_min,
             self.rho_max,
-            row_args,
+            float(self.angular_scale(length)[2]),
             float(origin),
             float(step),
             float(min_inverse_condition),
@@ -434,65 +428,3 @@ def _rpr3_reachable_jacobians(poses, cos_phi, sin_phi, base, platform, rho_min, 
             out[p, i, 1] = leg_y / rho * column_scale[1]
             out[p, i, 2] = (arm_x * leg_y - arm_y * leg_x) / rho * column_scale[2]
     return out
-
-
-# ----------------------------------------------------- exact x-sections
-@kernels.inline_jit
-def _signed_inverse_condition_3x3(r00, r01, r02, r10, r11, r12, r20, r21, r22):
-    """``sign(det J) sigma_min / sigma_max`` of a 3 x 3 matrix J given by rows.
-
-    The eigenvalues of ``G = J^T J`` in closed form (the trigonometric solution of the
-    symmetric 3 x 3 eigenproblem); the smallest as ``det(J)^2 / (lambda_1 lambda_2)``, which
-    keeps its relative accuracy near a singularity. The sign makes the value smooth through
-    a singularity (``det J`` changes sign there): linear interpolation then places the
-    dexterity limit on either side of it.
-    """
-    det = r00 * (r11 * r22 - r12 * r21) - r01 * (r10 * r22 - r12 * r20) + r02 * (r10 * r21 - r11 * r20)
-    g00 = r00 * r00 + r10 * r10 + r20 * r20
-    g11 = r01 * r01 + r11 * r11 + r21 * r21
-    g22 = r02 * r02 + r12 * r12 + r22 * r22
-    g01 = r00 * r01 + r10 * r11 + r20 * r21
-    g02 = r00 * r02 + r10 * r12 + r20 * r22
-    g12 = r01 * r02 + r11 * r12 + r21 * r22
-    q = (g00 + g11 + g22) / 3.0
-    d0, d1, d2 = g00 - q, g11 - q, g22 - q
-    p2 = d0 * d0 + d1 * d1 + d2 * d2 + 2.0 * (g01 * g01 + g02 * g02 + g12 * g12)
-    if p2 <= 0.0:
-        return 1.0 if det >= 0.0 else -1.0
-    p = math.sqrt(p2 / 6.0)
-    b00, b11, b22, b01, b02, b12 = d0 / p, d1 / p, d2 / p, g01 / p, g02 / p, g12 / p
-    half_det = 0.5 * (b00 * (b11 * b22 - b12 * b12) - b01 * (b01 * b22 - b12 * b02) + b02 * (b01 * b12 - b11 * b02))
-    angle = math.acos(min(max(half_det, -1.0), 1.0)) / 3.0
-    lam1 = q + 2.0 * p * math.cos(angle)
-    lam3 = q + 2.0 * p * math.cos(angle + 2.0 * math.pi / 3.0)
-    lam2 = 3.0 * q - lam1 - lam3
-    if not lam1 > 0.0:
-        return 0.0
-    lam_min = det * det / (lam1 * lam2) if lam2 > 0.0 else max(lam3, 0.0)
-    ratio = math.sqrt(min(lam_min / lam1, 1.0))
-    return ratio if det >= 0.0 else -ratio
-
-
-@kernels.inline_jit
-def _signed_inverse_condition_at(x, y, args):
-    """Signed ``1/kappa`` (:func:`_signed_inverse_condition_3x3`) of the homogenised Jacobian
-    of :meth:`RPR3._jacobian` at B_1 = (x, y) (mm); ``args`` (13,) holds the annulus centres
-    ``c_i = A_i - Rot(phi) B'_i`` (eq. 12-14; x then y), the arms ``Rot(phi) B'_i`` (x then y)
-    and the angular scale: the legs are ``L_i = (x, y) - c_i``."""
-    r = np.empty(9)
-    for i in range(3):
-        leg_x, leg_y = x - args[i], y - args[3 + i]
-        rho = math.sqrt(leg_x * leg_x + leg_y * leg_y)
-        r[3 * i] = leg_x / rho
-        r[3 * i + 1] = leg_y / rho
-        r[3 * i + 2] = (args[6 + i] * leg_y - args[9 + i] * leg_x) / rho * args[12]
-    return _signed_inverse_condition_3x3(r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8])
-
-
-@kernels.jit
-def _rpr3_x_sections(ys, centres_x, centres_y, rho_min, rho_max, row_args, origin, step, limit):
-    """:func:`~kinematics.annuli.annuli_x_sections` with the 3-RPR's signed ``1/kappa``
-    (:func:`_signed_inverse_condition_at`): a kernel of its own, so that it is cached on disk."""
-    return annuli_x_sections(
-        ys, centres_x, centres_y, rho_min, rho_max, _signed_inverse_condition_at, row_args, origin, step, limit
-    )
