@@ -120,10 +120,11 @@ is `docs/figures/accuracy_convergence.png`.
 7. **Planar mechanisms: exact sections** (`RPR3.exact_sections`, `RPR2.exact_sections`, one
    kernel for both: `kinematics.annuli.annuli_x_sections`). The 3-RPR's workspace at (y, phi)
    is, along x, the intersection of three annuli (seed 003 eq. 12-14): at most four intervals,
-   in closed form; the 2-RPR's at y the intersection of two (seed 004 eq. 1-2). V sums their lengths over a midpoint rule in (y, phi) (phi in `resolution` layers, y in 1.5x
-   as many rows, each layer's rows shifted by a golden-ratio fraction of a row, so that the
-   annulus that does not turn with phi is not met at the same offset in every layer); 1/kappa
-   (closed form for the 3 x 3 Jacobian, its sign kept so that it stays smooth through a
+   in closed form; the 2-RPR's at y the intersection of two (seed 004 eq. 1-2). V sums their
+   lengths over a midpoint rule in (y, phi) (phi in `resolution` layers, y in 1.5x as many
+   rows, each layer's rows shifted by a golden-ratio fraction of a row, so that the annulus
+   that does not turn with phi is not met at the same offset in every layer); 1/kappa (closed
+   form for the legs' 3 x 3 or 2 x 2 Jacobian, its sign kept so that it stays smooth through a
    singularity) by a corrected trapezoid rule along each interval, the dexterity limit placed by
    interpolation. This replaces the grid for the planar mechanisms, whose thin slivers and
    sharp corners (annuli meeting at grazing angles, narrower than a cell) one plane per cell
@@ -159,7 +160,8 @@ which the closed-form volume takes out of its V).
 known independently of any grid, the tests hold the default to it: the 2-RPR's reachable area
 (`RPR2.exact_area`, two annuli in closed form) against the sum of its sections before the
 closed form replaces it (six random designs within 0.1 %; the old count errs by up to 0.27 % on
-them), its dexterous area against the cell grid at 4x the default, and the 3-RPR's
+them), its dexterous area against the cell grid at 4x the default (and at 8x where the
+dexterity limit is 0.3 and reaches the sections' ends: within 0.3 %), and the 3-RPR's
 constant-orientation area (`RPR3.exact_area`).
 
 **Continuity.** When the boundary crosses a node, the plane passes through the node and its

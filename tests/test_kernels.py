@@ -276,3 +276,39 @@ def test_cone_test_without_arc_cosine_is_the_arc_cosine_test():
         for cosine in np.concatenate([near, rng.uniform(-1.0000001, 1.0000001, 2000)]):
             expected = math.acos(min(max(cosine, -1.0), 1.0)) <= cone
             assert _within_cone(float(cosine), cone, _cone_cosine(cone)) == expected, (cone, cosine)
+
+
+_CACHE_PROBE = """
+import importlib, pkgutil
+import numba
+import numpy as np
+import kinematics
+from kinematics import MECHANISMS
+from kinematics.workspace import evaluate
+
+for name, cls in sorted(MECHANISMS.builtins.items()):
+    lo = np.array([v.lower for v in cls.design_variables])
+    hi = np.array([v.upper for v in cls.design_variables])
+    evaluate(cls.from_design(0.5 * (lo + hi), **cls.default_fixed), resolution=cls.min_resolution)
+loaded, compiled = 0, []
+for info in pkgutil.iter_modules(kinematics.__path__):
+    module = importlib.import_module(f"kinematics.{info.name}")
+    for obj in vars(module).values():
+        if isinstance(obj, numba.core.dispatcher.Dispatcher) and obj.__module__ == module.__name__:
+            hits = sum(obj.stats.cache_hits.values())
+            loaded += hits
+            if len(obj.overloads) > hits:  # compiled here, not read from the cache
+                compiled.append(f"{module.__name__}.{obj.__name__}")
+print(loaded, " ".join(compiled) or "-")
+"""
+
+
+@pytest.mark.slow
+def test_a_second_process_loads_every_kernel_from_the_disk_cache():
+    """Each built-in's evaluation in a fresh process compiles nothing once a first process has
+    (a kernel whose compiled code holds a run-time address, e.g. of a function passed as an
+    argument, is never cached: every process would pay its compilation again)."""
+    for _ in range(2):  # the first may compile (a cold cache), the second must not
+        out = subprocess.run([sys.executable, "-c", _CACHE_PROBE], capture_output=True, text=True, check=True)
+    loaded, compiled = out.stdout.split(maxsplit=1)
+    assert int(loaded) >= 10 and compiled.strip() == "-", out.stdout + out.stderr
