@@ -270,24 +270,24 @@ def annuli_x_sections(ys, centres_x, centres_y, arms_x, arms_y, rho_min, rho_max
         c_x, c_y, a_x, a_y = centres_x[p], centres_y[p], arms_x[p], arms_y[p]
         left, right = -np.inf, np.inf
         for i in range(legs):
-            b = y - centres_y[p, i]
+            b = y - c_y[i]
             w2 = outer2 - b * b
             if w2 < 0.0:
                 left, right = 1.0, 0.0
                 break
             w = math.sqrt(w2)
-            left, right = max(left, centres_x[p, i] - w), min(right, centres_x[p, i] + w)
+            left, right = max(left, c_x[i] - w), min(right, c_x[i] + w)
         if not right > left:
             continue
         n = 1
         lo[0], hi[0] = left, right
         for i in range(legs):  # remove the inner discs (|L_i| < rho_min)
-            b = y - centres_y[p, i]
+            b = y - c_y[i]
             w2 = inner2 - b * b
             if w2 <= 0.0:
                 continue
             w = math.sqrt(w2)
-            hole_lo, hole_hi = centres_x[p, i] - w, centres_x[p, i] + w
+            hole_lo, hole_hi = c_x[i] - w, c_x[i] + w
             k = 0
             for j in range(n):
                 if hole_hi <= lo[j] or hole_lo >= hi[j]:
