@@ -59,11 +59,15 @@ PAPER = {
     "delta": dict(R=200.0, r=50.0, la=200.0, lb=400.0),
     "gough_stewart": dict(r_base=400.0, r_platform=250.0, sep_base=30.0, sep_platform=30.0, height=700.0),
 }
-#: optima documented in docs/reproduction.md (design vectors as printed there)
-OPTIMA = {
+#: documented optima: keyword arguments of ``get_mechanism`` (docs/reproduction.md) or design vectors
+#: (``from_design``: benchmarks/best_known.json, docs/reproduction.md's trade-off)
+OPTIMA: dict[str, list[dict | list[float]]] = {
     "h4": [dict(d=13.52484, h=13.88781, Qz=35.18892)],  # seed 000 Table 1 design
     # the best known (benchmarks/best_known.json), then two optima of the cell count it replaced
     "tricept": [dict(a=200.0, b=300.0, d=200.0), dict(a=200.1, b=300.0, d=191.3), dict(a=203.6, b=303.4, d=186.2)],
+    # rpr3_mixed's best known (w_d = 0.5), and the trade-off's w_d = 1 optimum
+    "rpr3": [[100.0, 93.34218148345319], [128.2046, 100.0]],
+    "rpr2": [[8.774, 3.0]],  # the trade-off's w_d = 0.5 optimum
 }
 
 
@@ -99,8 +103,13 @@ is `docs/figures/accuracy_convergence.png`.
    every grid edge whose ends differ in membership (and on the half edge from an inside end
    node to the box face): (a) each margin linear between the ends, the first sign change `t1`;
    (b) one look at `t1` (the membership test and the margins there), each margin as the
-   parabola through its three values, the first root in [0, 1]: third order in the edge length,
-   continuous in the design, one evaluation per crossing. The integrands at the crossing are
+   parabola through its three values, its first root in the bracket where the three values
+   change sign (`[0, t1]` or `[t1, 1]`; a margin negative at none of them has no root): third
+   order in the edge length, continuous in the design, one evaluation per crossing. The bracket
+   matters where a margin is not smooth: H4's bounds of its z interval take the root of a rod's
+   reach, infinitely steep at its boundary, and with `t1` next to an end a parabola through
+   three positive values dipped below zero anywhere on the edge, a spurious root that came and
+   went as the design moved (a step of 1.6e-4 in V at the h4_mixed optimum before). The integrands at the crossing are
    those at `t1`. A mechanism without margins (an external one, `examples/five_bar`) is bisected
    four times instead, the crossing then to h/32. Compiled (numba) margins and crossing steps;
    `PM_DESIGN_KERNELS=numpy` runs their numpy reference, and `tests/test_kernels.py` checks that
@@ -121,8 +130,8 @@ is `docs/figures/accuracy_convergence.png`.
    kernel for both: `kinematics.annuli.annuli_x_sections`). The 3-RPR's workspace at (y, phi)
    is, along x, the intersection of three annuli (seed 003 eq. 12-14): at most four intervals,
    in closed form; the 2-RPR's at y the intersection of two (seed 004 eq. 1-2). V sums their
-   lengths over a midpoint rule in (y, phi) (phi in `resolution` layers, y in 1.5x as many
-   rows, each layer's rows shifted by a golden-ratio fraction of a row, so that the annulus
+   lengths over a midpoint rule in (y, phi) (1.5 x `resolution` layers in phi and as many
+   rows in y, `kinematics.workspace.SECTION_NODES`; each layer's rows shifted by a golden-ratio fraction of a row, so that the annulus
    that does not turn with phi is not met at the same offset in every layer); 1/kappa (closed
    form for the legs' 3 x 3 or 2 x 2 Jacobian, its sign kept so that it stays smooth through a
    singularity) by a corrected trapezoid rule along each interval, the dexterity limit placed by
@@ -168,9 +177,14 @@ constant-orientation area (`RPR3.exact_area`).
 cell counts one half from either side (whatever the plane's direction): the count has no step.
 The crossings on the margins, the 3-RPR's sections and the occupied box move continuously with
 the design. `tests/test_accuracy.py::test_eta_along_a_line_has_no_steps` walks eta (w_d = 0.5)
-through an optimum in steps of 0.05 % of a design variable's range: no change between
-neighbours exceeds twice the median change (+1e-5 eta), for H4, Tricept, Delta, 2-RPR and 3-RPR;
-the old count fails the same test for H4, Tricept, Delta and 3-RPR.
+through an optimum (H4: h4_mixed's best known; Tricept: a max-volume optimum; 3-RPR:
+rpr3_mixed's best known; 2-RPR: the trade-off's w_d = 0.5 optimum; the Delta, which has none
+documented: the middle of its design box) in steps of 0.05 % of a design variable's range: no
+change between neighbours exceeds twice the median change (+1e-5 eta); the old count fails the
+same test for H4, Tricept, Delta and 3-RPR. Steps remain below that: where the outside end of a
+cut edge turns unreachable, its dexterity margin becomes unknown and the crossing's model
+changes from the parabola to the line (at the h4_mixed optimum, zoomed in 1000x: a step of
+1e-5 of the GDI, 7e-6 of eta).
 
 **Error bars** (part 2). `Evaluation.volume_error` and `gdi_error` (with `error_estimate=True`,
 the default of `evaluate`) are the change against the same method at half the resolution
@@ -212,10 +226,19 @@ def random_designs(name: str, seed: int, count: int, label: str = "random") -> l
     return out
 
 
+def optimum(name: str, k: int):
+    """The mechanism of the ``k``-th documented optimum of :data:`OPTIMA`."""
+    design = OPTIMA[name][k]
+    if isinstance(design, dict):
+        return get_mechanism(name, **design)
+    cls = MECHANISMS[name]
+    return cls.from_design(np.array(design), **cls.default_fixed)
+
+
 def designs(name: str, seed: int = 0) -> list[tuple[str, object]]:
     """(label, mechanism) pairs: paper design, documented optima, two random designs."""
     out = [("paper", get_mechanism(name, **PAPER[name]))]
-    out += [(f"optimum {k}", get_mechanism(name, **d)) for k, d in enumerate(OPTIMA.get(name, []))]
+    out += [(f"optimum {k}", optimum(name, k)) for k in range(len(OPTIMA.get(name, [])))]
     return out + random_designs(name, seed, 2)
 
 

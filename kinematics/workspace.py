@@ -448,7 +448,8 @@ def _crossings(
        way from ``p_in``), over the margins known at both ends.
     2. One look at ``t1``: the membership test (its ``1/kappa`` and integrands) and the
        margins there. Each margin as the parabola through its three values (a line through
-       the two known ones where the outside end's is unknown): the first root in [0, 1].
+       the two known ones where the outside end's is unknown): its first root in the bracket
+       where the three values change sign, the first of the margins' roots the crossing.
        Third order in the edge length for smooth margins, and continuous in the design.
     3. The integrands at the crossing are those at ``t1`` (``1/kappa`` at the limit where the
        dexterity margin is the first), or those of the inside end where ``t1`` is
@@ -556,10 +557,20 @@ def _refined_crossing(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Step 2 of :func:`_crossings` on the ``rows`` (M,) of :func:`_linear_crossing`'s arrays, with
     the margins ``reach_mid`` (M, K), ``dex_mid`` (M,) at ``tm`` (M,), the fraction of step 1:
-    the first root in [0, 1] of each margin as the parabola through its three values (the line
-    through the first two where the outside end's is unknown). Returns the root (``tm`` where
-    no margin has one there) and the column of the first margin (K: the dexterity margin; -1:
-    none)."""
+    each margin as the parabola through its three values, its first root in the bracket where
+    the three values change sign (``[0, tm]`` where it is negative at ``tm``, else ``[tm, 1]``
+    where it is negative at the outside end; none where it is negative at none of them); the
+    line through the first two where the outside end's is unknown. Returns the root (``tm``
+    where no margin has one) and the column of the first margin (K: the dexterity margin; -1:
+    none).
+
+    Why brackets: a margin positive at all three points has no root there to the accuracy of
+    the samples, and a parabola through them can still dip below zero: where a margin is not
+    smooth (H4's bounds of the z interval take the root of the rod's reach, infinitely steep at
+    its boundary) and ``tm`` lies next to an end, its curvature is huge and the dip a spurious
+    root anywhere on the edge, which came and went as the design moved (a step in V of 1.6e-4
+    at H4's optimum). Within a bracket the root moves continuously (to ``tm`` as the middle value
+    goes to zero, from either side)."""
     n = dex_in.size
     g0 = _stacked(reach[:n][rows], dex_in[rows])
     g1 = _stacked(reach[n:][rows], dex_out[rows])
@@ -572,7 +583,14 @@ def _refined_crossing(
         disc = c1 * c1 - 4.0 * c2 * g0
         root = np.sqrt(np.where(disc >= 0, disc, np.nan))
         both = np.stack([2.0 * g0 / (-c1 - root), 2.0 * g0 / (-c1 + root)])
-        quadratic = np.where((both >= 0.0) & (both <= 1.0), both, np.inf).min(axis=0)
+        early = gm < 0.0  # the sign changes before tm, else (g1 < 0) after it
+        lo = np.where(early, 0.0, t)
+        hi = np.where(early, t, 1.0)
+        quadratic = np.where((both >= lo) & (both <= hi), both, np.inf).min(axis=0)
+        # rounding at a bracket's end: the line between the bracket's two values
+        ga, gb = np.where(early, g0, gm), np.where(early, gm, g1)
+        quadratic = np.where(np.isfinite(quadratic), quadratic, lo + (hi - lo) * ga / (ga - gb))
+        quadratic = np.where(early | (g1 < 0.0), quadratic, np.inf)
         line = t * g0 / (g0 - gm)
         line = np.where((gm < g0) & (line >= 0.0) & (line <= 1.0), line, np.inf)
         roots = np.where(np.isnan(g1) | (t <= 0.0) | (t >= 1.0), line, quadratic)
@@ -633,17 +651,23 @@ def _refined_crossing_compiled(reach, reach_mid, dex_in, dex_mid, dex_out, rows,
                 s = t * a / (a - mid)
                 root = s if (mid < a and s >= 0.0 and s <= 1.0) else np.inf
             else:
+                if mid < 0.0:  # the bracket where the three values change sign
+                    lo, hi, ga, gb = 0.0, t, a, mid
+                elif b < 0.0:
+                    lo, hi, ga, gb = t, 1.0, mid, b
+                else:
+                    continue  # not negative at any of the three points: no root
                 c2 = ((mid - a) - t * (b - a)) / (t * (t - 1.0))
-                if a > 0.0 and mid > 0.0 and b > 0.0 and c2 <= 0.0:
-                    continue  # concave and positive at both ends: no root in [0, 1]
                 c1 = b - a - c2
                 disc = c1 * c1 - 4.0 * c2 * a
                 root = np.inf
                 if disc >= 0.0:
                     sq = math.sqrt(disc)
                     for s in (2.0 * a / (-c1 - sq), 2.0 * a / (-c1 + sq)):
-                        if s >= 0.0 and s <= 1.0 and s < root:
+                        if s >= lo and s <= hi and s < root:
                             root = s
+                if root == np.inf:  # rounding at a bracket's end: the line between its two values
+                    root = lo + (hi - lo) * ga / (ga - gb)
             if root < best:
                 best = root
                 best_c = c
@@ -1436,8 +1460,11 @@ def _integrate_grid(
 
 # --------------------------------------------------------------- sections
 #: nodes of the (y, phi) rule of :func:`_integrate_sections` per ``resolution``: phi, y, and the
-#: sample spacing along the exact axis as a fraction of the box (anisotropic: docs/accuracy.md)
-SECTION_NODES = (1.0, 1.5, 0.375)
+#: sample spacing along the exact axis as a fraction of the box (anisotropic: docs/accuracy.md).
+#: Why 1.5 x phi: V is exact along x and its error is the (y, phi) rule's, mostly phi's (3-RPR at
+#: its default, 14 designs: worst V 0.113 % with phi at 1x, 0.058 % at 1.5x, 0.089 % with y at 1.25x
+#: instead, for the same number of rows)
+SECTION_NODES = (1.5, 1.5, 0.375)
 
 
 def _integrate_sections(mechanism, resolution, orientation, min_ic, length):
@@ -1447,8 +1474,8 @@ def _integrate_sections(mechanism, resolution, orientation, min_ic, length):
     (:meth:`~kinematics.base.Mechanism.exact_sections`: exact interval ends, ``1/kappa`` by the
     corrected trapezoid rule on nodes ``step`` apart, the dexterity limit placed by
     interpolation). The other two axes (3-RPR: y, phi) take the midpoint rule over the pose
-    box, ``SECTION_NODES[1] * resolution`` rows along y per layer and ``resolution`` layers
-    along phi (one at constant orientation); each layer's rows are shifted by the fraction
+    box, ``SECTION_NODES[1] * resolution`` rows along y per layer and
+    ``SECTION_NODES[0] * resolution`` layers along phi (one at constant orientation); each layer's rows are shifted by the fraction
     ``{j g}`` of a row (g the golden ratio's conjugate, j the layer), so that a feature at
     constant y (3-RPR: the annulus of the leg whose platform joint is the pose point does not
     turn with phi) is not sampled at the same offset in every layer. Continuous in the design:
