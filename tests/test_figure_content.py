@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
+from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 
 import pipeline.stages.plot as plot_module
@@ -75,8 +76,10 @@ def test_run_and_sweep_figures(tmp_path, saved):
     history = pd.DataFrame(
         {"generation": range(20), "best": np.linspace(0.1, 0.3, 20), "mean": np.linspace(0.05, 0.25, 20)}
     )
-    plot_module.plot_convergence(history, tmp_path / "c.png", "ga convergence (h4, mixed)", "η [1]", reference=0.31)
-    assert "gap 3.23 %" in saved[-1].axes[0].get_legend().get_texts()[-1].get_text()
+    plot_module.plot_convergence(
+        history, tmp_path / "c.png", "ga convergence (h4, mixed)", "η [1]", reference=0.31, gap="3.23 % ± 0.05 %"
+    )
+    assert "gap 3.23 % ± 0.05 %" in saved[-1].axes[0].get_legend().get_texts()[-1].get_text()
     best = pd.DataFrame(
         {
             "objective": ["mixed"] * 6,
@@ -87,10 +90,15 @@ def test_run_and_sweep_figures(tmp_path, saved):
             "gdi": np.linspace(0.1, 0.4, 6),
             "suri": np.linspace(0.5, 0.2, 6),
             "objective_value": np.linspace(0.3, 0.2, 6),
+            "objective_error": [0.01, 0.0, 0.02, 0.0, 0.0, 0.0],
         }
     )
     plot_module.plot_tradeoff(best, tmp_path / "t.png")
     assert "one seed per point" in saved[-1].axes[0].get_title()  # repeats of seed 0 are not seeds
+    # η's error bars: the first run of each w_d (repeats of a seed count once), half-height its error
+    (bars,) = [c for c in saved[-1].axes[0].collections if isinstance(c, LineCollection)]
+    heights = sorted(round(float(abs(seg[1, 1] - seg[0, 1])) / 2, 9) for seg in bars.get_segments())
+    assert heights == [0.0, 0.01, 0.02]
     plot_module.plot_front(
         pd.DataFrame({"volume": [1.0, 2.0], "gdi": [0.3, 0.2]}),
         ["volume", "gdi"],
@@ -246,6 +254,7 @@ def test_convergence_shows_the_polished_optimum(tmp_path, saved):
         reference=0.28,
         optimum=0.274225,
         found_by="polish",
+        gap="2.06 % ± 0.1 %",
     )
     ax = saved[-1].axes[0]
     legend = [t.get_text() for t in ax.get_legend().get_texts()]
@@ -254,7 +263,7 @@ def test_convergence_shows_the_polished_optimum(tmp_path, saved):
     plot_module.plot_convergence(history, tmp_path / "c2.png", f"cmaes convergence ({what})", "η [1]")
     front = pd.DataFrame({"gdi": [0.1, 0.2], "suri": [0.3, 0.1]})
     plot_module.plot_front(front, ["gdi", "suri"], tmp_path / "f.png", what)
-    assert any("gap 2.06 %" in text for text in legend)  # (0.28 - 0.274225) / 0.28, not from 0.2714
+    assert any("gap 2.06 % ± 0.1 %" in text for text in legend)  # the gap as recorded, with its error
     assert max(max(line.get_ydata()) for line in ax.lines) == pytest.approx(0.28)
     assert any(0.274225 in list(line.get_ydata()) for line in ax.lines)
     best = pd.DataFrame(
@@ -268,11 +277,17 @@ def test_convergence_shows_the_polished_optimum(tmp_path, saved):
             "seed": [3],
             "objective_value": [0.274225],
             "found_by": ["polish"],
+            "reference_value": [0.28],
+            "reference_gap": [2.06e-2],
+            "reference_gap_error": [3e-2],
         }
     )
     convergence_figure(best, history.assign(run_id="a"))
     panel = saved[-1].axes[0]
-    assert "after polish: 0.2742" in [t.get_text() for t in panel.get_legend().get_texts()]
+    texts = [t.get_text() for t in panel.get_legend().get_texts()]
+    assert "after polish: 0.2742" in texts
+    # a gap below its error bar is "within error", never a percentage finer than the objective
+    assert "reference 0.28 (gap within error (< 3 %))" in texts
     for fig in saved:
         check_figure(fig)
         assert_titles_fit(fig)

@@ -4,6 +4,7 @@ searches), and the error bars of the best row."""
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from pipeline.config import MechanismConfig, ObjectiveConfig
@@ -128,3 +129,17 @@ def test_best_row_error_bars_and_evaluations_apart_from_the_reference():
         mech, 6, "grid", 2, ObjectiveConfig("mixed", 0.5), GAConfig(population=4, generations=2, reference=False)
     )
     assert off["best"]["reference_evaluations"] == 0 and off["best"]["reference_gap_label"] == ""
+
+
+def test_the_gap_of_several_seeds_is_labelled_as_one_run_is():
+    """Figures and the report label a group of runs' gap by the same rule as one run's."""
+    from pipeline.stages.optimise import gap_label, group_gap_label
+
+    assert gap_label(0.004, 0.005) == "within error (< 0.5 %)"
+    assert gap_label(0.05, 0.001) == "5 % ± 0.1 %"
+    runs = pd.DataFrame({"reference_gap": [0.01, 0.03], "reference_gap_error": [0.001, 0.002]})
+    assert group_gap_label(runs) == "2 % ± 0.2 % (mean of 2)"
+    assert group_gap_label(runs.iloc[:1]) == "1 % ± 0.1 %"
+    assert group_gap_label(runs.assign(reference_gap_error=0.05)) == "within error (< 5 %) (mean of 2)"
+    assert group_gap_label(runs.assign(reference_gap=np.nan)) == ""
+    assert group_gap_label(pd.DataFrame({"objective_value": [1.0]})) == ""  # no reference columns

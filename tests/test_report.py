@@ -3,6 +3,7 @@ design variables with units, gaps in percent, captions, repeats of one seed told
 
 from __future__ import annotations
 
+import html
 import re
 import shutil
 from pathlib import Path
@@ -61,6 +62,11 @@ def test_report_table_units_gaps_captions_and_seeds(sweep):
     text = build_report(sweep)
     assert "b [mm]" in text and "q_min [mm]" in text  # design variables with units
     assert "gap to reference [%]" in text
+    # each optimum with its estimated discretisation error, each gap as recorded (issue 23)
+    best = read_dataset(sweep.parents[1] / "dataset", purposes=None)  # +debug=fast runs
+    assert re.search(r"η = 0\.\d+ ± \d", text)
+    for label in best["reference_gap_label"]:
+        assert html.escape(label) in text
     assert "rpr2, mixed, w_d = 0.5, ga, seed 0" in text  # captions name what a run is
     # the repeat of seed 0 is counted once: 3 runs, 2 distinct seeds, 1 repeat
     row = re.search(r"<tr><td>rpr2</td><td>mixed</td><td>0.5</td><td>ga</td><td>rpr2_mixed</td>(.*?)</tr>", text).group(

@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from pipeline.config import DesignSpace, MechanismConfig
+from pipeline.stages.optimise import group_gap_label
 from pipeline.stages.plot import distinct_seeds, fit_title, panel_grid, set_title
 from pipeline.stages.slices import draw_slice, symbol, workspace_slice
 
@@ -49,7 +50,8 @@ def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
     """Best objective so far against the generation, one panel per (objective, mechanism) and one
     line per group: mean and range over distinct seeds, the group's reported optimum where it
     beats the last generation (a star "after polish": the polish step follows the generations),
-    with the group's reference optimum (dashed, where one was run) and the final gap in percent. Best so far, not best per
+    with the group's reference optimum (dashed, where one was run) and the runs' recorded gap
+    (:func:`pipeline.stages.optimise.group_gap_label`: "within error" below its error bar). Best so far, not best per
     generation: a restarting optimiser (IPOP-CMA-ES) starts each restart from a wide population,
     whose best drops without anything being lost. One panel per mechanism because the objective's
     scale differs between mechanisms (η of a 2-RPR near 0.8, of an H4 near 0.2)."""
@@ -98,13 +100,14 @@ def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
             if len(ref):
                 references_drawn = True
                 reference = float(ref.max())
-                gap = 100 * (reference - final) / abs(reference) if reference else np.nan
+                # the gap as recorded per run (within error where it is below its error bar)
+                gap = group_gap_label(members)
                 ax.axhline(
                     reference,
                     ls="--",
                     lw=1,
                     color=line.get_color(),
-                    label=f"reference {reference:.4g} (gap {gap:.2g} %)",
+                    label=f"reference {reference:.4g}" + (f" (gap {gap})" if gap else ""),
                 )
         ax.set_xlabel("generation [1]")
         unit = best.loc[best["objective"].astype(str) == objective, "objective_unit"].iloc[0]

@@ -185,7 +185,10 @@ def optima_table(best: pd.DataFrame, dirs: dict[str, Path], base: Path) -> str:
         unit = row.get("objective_unit", "")
         unit = "" if unit in (None, "1") else unit  # a dimensionless index reads "η = 0.2", not "η = 0.2 1"
         value = row["objective_value"]
-        cells.append(_cell(f"{symbol(str(row['objective']))} = {value:.6g} {unit}".rstrip(), value))
+        # the optimum's estimated discretisation error (issue 23: error bars are data)
+        error = row.get("objective_error")
+        error = "" if error is None or pd.isna(error) else f" ± {float(error):.2g}"
+        cells.append(_cell(f"{symbol(str(row['objective']))} = {value:.6g}{error} {unit}".rstrip(), value))
         cells.append(_cell(f"{row['volume']:.6g} {row.get('volume_unit', '')}", row["volume"]))
         cells += [_cell(row.get("gdi")), _cell(row.get("suri"))]
         gap = row.get("reference_gap")

@@ -216,6 +216,28 @@ def reference_stage(
     }
 
 
+def gap_label(gap: float, gap_error: float) -> str:
+    """A relative gap to the reference as reported everywhere (best.parquet, log, figures, report):
+    "within error (< e %)" where ``gap <= gap_error`` (its percentage is not quoted), else
+    "g % ± e %". ``gap``, ``gap_error``: fractions of the reference's value."""
+    if gap <= gap_error:
+        return f"within error (< {100 * gap_error:.2g} %)"
+    return f"{100 * gap:.3g} % ± {100 * gap_error:.2g} %"
+
+
+def group_gap_label(runs: pd.DataFrame) -> str:
+    """:func:`gap_label` of several runs of one study (seeds): their mean gap against their largest
+    gap error, "" where no run has a reference. ``runs``: rows of ``best`` with the columns
+    ``reference_gap`` and ``reference_gap_error`` (fractions)."""
+    if "reference_gap_error" not in runs:
+        return ""
+    rows = runs[["reference_gap", "reference_gap_error"]].dropna()
+    if rows.empty:
+        return ""
+    label = gap_label(float(rows["reference_gap"].mean()), float(rows["reference_gap_error"].max()))
+    return label if len(rows) == 1 else f"{label} (mean of {len(rows)})"
+
+
 def reference_columns(best: dict, reference: dict | None, names: list[str]) -> dict:
     """The best row's reference columns (NaN/"" without a reference); see :data:`pipeline.store.parquet.COLUMNS`.
 
@@ -241,7 +263,7 @@ def reference_columns(best: dict, reference: dict | None, names: list[str]) -> d
     gap = (reference["value"] - best["objective_value"]) / scale
     gap_error = (best["objective_error"] + reference["error"]) / scale
     within = bool(gap <= gap_error)
-    label = f"within error (< {100 * gap_error:.2g} %)" if within else f"{100 * gap:.3g} % ± {100 * gap_error:.2g} %"
+    label = gap_label(gap, gap_error)
     out = {
         "reference_value": float(reference["value"]),
         "reference_gap": float(gap),

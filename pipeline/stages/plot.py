@@ -127,6 +127,7 @@ def run_figures(mechanism, objective, optimizer, plot, optimum: dict) -> dict[st
             reference=best.get("reference_value"),
             optimum=best.get("objective_value"),
             found_by=str(best.get("found_by", "")),
+            gap=str(best.get("reference_gap_label", "")),
         )
         plot_workspace(
             mech,
@@ -153,14 +154,17 @@ def plot_convergence(
     reference: float | None = None,
     optimum: float | None = None,
     found_by: str = "",
+    gap: str = "",
 ) -> Path:
     """Best so far, best and mean objective per generation (seed 000 Fig. 7), with the reference optimum.
 
     ``optimum`` (the objective's unit): the run's reported optimum; where it is better than
     the history's best (the polish step after the last generation) it is drawn as a marker
     after the last generation, labelled by ``found_by``. ``reference``: the reference optimum
-    (CMA-ES + polish, :mod:`pipeline.stages.optimise`), drawn as a horizontal line with the
-    gap ``(reference - optimum) / |reference|`` in percent; None or NaN: not run.
+    (the best of several searches, :mod:`pipeline.stages.optimise`), drawn as a horizontal
+    line labelled with ``gap``, the run's gap as recorded (``reference_gap_label``: "within
+    error" where the gap is below its error, never a percentage finer than the objective);
+    None or NaN: not run.
     """
     fig, (ax,) = _figure(6, 4)
     # best so far (objectives are maximised): a restart of IPOP-CMA-ES lowers the generation's
@@ -177,8 +181,8 @@ def plot_convergence(
         ax.plot([last + 0.5], [optimum], "*", color="C3", ms=11, label=f"{step}: {optimum:.6g}")
         final = float(optimum)
     if reference is not None and np.isfinite(reference):
-        gap = 100 * (reference - final) / abs(reference) if reference else float("nan")
-        ax.axhline(reference, color="k", ls="--", lw=1, label=f"reference optimum {reference:.6g} (gap {gap:.3g} %)")
+        label = f"reference optimum {reference:.6g}" + (f" (gap {gap})" if gap else "")
+        ax.axhline(reference, color="k", ls="--", lw=1, label=label)
     ax.set_xlabel("generation [1]")
     ax.set_ylabel(ylabel)
     set_title(ax, title, 11, width=0.85 * fig.get_figwidth())
@@ -251,7 +255,8 @@ def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
     a CMA-ES at w_d = 0.8 are different studies, never one line, and never each other's
     seeds. Within a group, runs with the same w_d and different seeds are drawn as the mean
     with a band from their minimum to maximum; repeats of one seed count once
-    (:func:`distinct_seeds`). Panels in rows of at most three (:func:`panel_grid`).
+    (:func:`distinct_seeds`); η carries error bars, its estimated discretisation error
+    (``objective_error``, the largest over the seeds). Panels in rows of at most three (:func:`panel_grid`).
     """
     mixed = best[best["objective"].astype(str) == "mixed"]
     group_keys = [k for k in ("optimizer", "experiment") if k in mixed.columns]
@@ -270,6 +275,17 @@ def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
             for column, _, marker, style in TRADEOFF_QUANTITIES:
                 ax.plot(w, stats[(column, "mean")], marker=marker, ls=style, color=colour, ms=4)
                 ax.fill_between(w, stats[(column, "min")], stats[(column, "max")], color=colour, alpha=0.15)
+            if "objective_error" in frame:  # η's estimated discretisation error, the largest of the seeds
+                error = frame.groupby("w_d")["objective_error"].max().reindex(stats.index)
+                ax.errorbar(
+                    w,
+                    stats[("objective_value", "mean")],
+                    yerr=error.to_numpy(),
+                    fmt="none",
+                    ecolor=colour,
+                    capsize=3,
+                    lw=1,
+                )
             seeds = int(frame.groupby("w_d").size().max())
             most_seeds = max(most_seeds, seeds)
             key = key if isinstance(key, tuple) else (key,)
@@ -282,6 +298,7 @@ def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
         ax.grid(alpha=0.3)
         if len(part):
             spread = "mean and range over the seeds of each line" if most_seeds > 1 else "one seed per point"
+            spread += "; bars: η's error"
             set_title(ax, f"{name}: GDI, SURI, η of the optima vs $w_d$\n({spread})", 10, width=4.0)
             styles = [
                 Line2D([], [], color="0.3", marker=marker, ls=style, ms=4, label=label)
