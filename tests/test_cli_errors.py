@@ -81,6 +81,73 @@ def test_a_run_s_bad_override_names_its_field(argv, says, never, capsys):
     assert all(s in err for s in says) and never not in err, err
 
 
+def _refused(argv: list[str], capsys) -> str:
+    register_configs()
+    with pytest.raises(SystemExit) as exit_info:
+        precheck_overrides(argv)
+    assert exit_info.value.code == 2
+    return _one_line(capsys)
+
+
+@pytest.mark.parametrize("spelling", ["nan", ".nan", ".NaN", "-inf", ".inf", "-.inf"])
+@pytest.mark.parametrize(
+    "key, allowed",
+    [
+        ("mechanism.min_inverse_condition", "[0, 1)"),
+        ("mechanism.length", "null or a finite number > 0"),
+        ("evaluate.max_hours", "(0, 10000]"),
+    ],
+)
+def test_every_spelling_of_nan_and_inf_names_the_field_and_its_range(key, allowed, spelling, capsys):
+    # Hydra reads nan and inf as numbers, but YAML's .nan and .inf as text: both reach the field's range
+    err = _refused([f"{key}={spelling}", "+debug=fast"], capsys)
+    assert err.startswith(f"error: {key}=") and err.endswith(f"is invalid: allowed {allowed}"), err
+
+
+@pytest.mark.parametrize(
+    "argv, allowed",
+    [
+        (["mechanism.orientation=[.nan,10]"], "null or [lo, hi] in degrees"),
+        (["mechanism.design.lower=[.nan,0.01,0.35]"], "finite numbers with lower < upper"),
+        (["mechanism=rpr2", "mechanism.design.upper=[.inf,6]"], "finite numbers with lower < upper"),
+    ],
+)
+def test_a_list_with_yaml_s_nan_names_the_field_and_what_it_takes(argv, allowed, capsys):
+    err = _refused([*argv, "+debug=fast"], capsys)
+    key = argv[-1].split("=", 1)[0]
+    assert err.startswith(f"error: {key}=") and allowed in err and "allowed a number" not in err, err
+
+
+def test_mechanism_path_without_a_class_names_mechanism_name_and_what_it_takes(capsys):
+    err = _refused(["mechanism=path", "+debug=fast"], capsys)
+    assert err.startswith("error: mechanism.name is missing:"), err
+    assert "mechanism.name=package.module:Class" in err and "mechanism=h4" not in err and "h4" in err, err
+    assert "Structured config" not in err, err
+
+
+def test_an_unknown_mechanism_option_says_what_path_needs(capsys):
+    err = _refused(["mechanism=h5", "+debug=fast"], capsys)
+    assert "allowed: delta," in err and "path (a Mechanism class of your own: also set mechanism.name=" in err, err
+
+
+def test_the_time_budget_names_the_bound_the_resolution_and_what_passes(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    # the default resolution of h4 (the user set none): the bound the user set is named first
+    err = _refused(["evaluate.max_hours=0.001"], capsys)
+    assert err.startswith("error: evaluate.max_hours=0.001 is invalid: the run at evaluate.resolution="), err
+    assert "(the default of h4, method grid)" in err and "parallel.n_jobs=2" in err, err
+    assert "evaluate.resolution <= " in err and "evaluate.allow_coarse=true" in err, err
+    # each change the message allows passes the check
+    hours = err.split("allowed: evaluate.max_hours >= ", 1)[1].split(",", 1)[0]
+    precheck_overrides([f"evaluate.max_hours={hours}"])
+    err = _refused(["evaluate.resolution=39", "evaluate.max_hours=0.01"], capsys)
+    assert err.startswith("error: evaluate.max_hours=0.01 is invalid: the run at evaluate.resolution=39 is"), err
+    top = err.split("evaluate.resolution <= ", 1)[1].split(",", 1)[0]
+    assert "allow_coarse" not in err, err
+    precheck_overrides([f"evaluate.resolution={top}", "evaluate.max_hours=0.01"])
+    assert "is estimated at" in _refused([f"evaluate.resolution={int(top) + 1}", "evaluate.max_hours=0.01"], capsys)
+
+
 @pytest.mark.parametrize(
     "argv, says",
     [

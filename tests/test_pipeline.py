@@ -122,6 +122,12 @@ def test_results_schema_and_refined_evaluation(tmp_path):
     assert "parallel" not in stored and stored["objective"]["w_d"] == 0.5
     assert schema.field("volume").metadata[b"unit"] == b"volume_unit"
     assert schema.field("d_ratio").metadata[b"unit"] == b"d / stroke"
+    # every column is documented (pipeline.store.parquet.COLUMNS, docs/configuration.md), the
+    # per-variable ones (<var>_reference, <var>_flat_lower, ...) with their variable's unit
+    assert not [f.name for f in schema if not f.metadata[b"description"]]
+    for name in ("d_ratio", "h_ratio", "Qz_ratio"):
+        for suffix in ("_reference", "_flat_lower", "_flat_upper"):
+            assert schema.field(name + suffix).metadata[b"unit"] == schema.field(name).metadata[b"unit"]
 
 
 def test_figures_are_written(tmp_path):

@@ -9,10 +9,12 @@ for a study's overrides too.
 
 from __future__ import annotations
 
+import re
 import sys
 from pathlib import Path
 
 from pipeline.config import CONFIG_DIR
+from pipeline.config.registry import OPTION_NOTES
 from pipeline.config.suggest import did_you_mean, key_suggestion
 from pipeline.errors import ConfigError, check_writable
 
@@ -27,7 +29,9 @@ def one_line(exc: BaseException) -> str:
         start = next(k for k, ln in enumerate(lines) if ln.startswith("Available options")) + 1
         options = [ln for ln in lines[start:] if not ln.startswith(("Config search path", "provider="))]
         options = [ln.split()[0] for ln in options if ln and ":" not in ln]
-        text += f"; allowed: {', '.join(options)}"
+        group = re.search(r"Available options in '([^']+)'", str(exc))
+        notes = {o: OPTION_NOTES.get((group.group(1) if group else "", o)) for o in options}
+        text += f"; allowed: {', '.join(f'{o} ({notes[o]})' if notes[o] else o for o in options)}"
     elif len(lines) > 1 and not lines[1].startswith(("full_key", "object_type", "reference_type")):
         text += f": {lines[1]}"
     elif exc.__cause__ is not None and str(exc.__cause__).strip():
@@ -41,8 +45,6 @@ def suggestion(exc: BaseException, argv: list[str]) -> str:
     Hydra's own advice for a mistyped key (``objective.wd=0.5``) is to append it
     with ``+``; the user almost always meant an existing key (``objective.w_d``).
     """
-    import re
-
     text = str(exc)
     key = re.search(r"Could not override '([^']+)'", text) or re.search(r"Key '([^']+)' is not in struct", text)
     if key:

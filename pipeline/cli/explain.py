@@ -18,6 +18,7 @@ from collections.abc import Callable, Sequence
 
 from omegaconf import DictConfig
 
+from pipeline.config.mechanism import DesignSpace
 from pipeline.config.schema import Config, MechanismConfig
 from pipeline.config.suggest import did_you_mean, key_suggestion
 from pipeline.errors import ConfigError
@@ -130,19 +131,35 @@ def _field_types(schema: type) -> dict[str, object]:
 
 
 def _probe(section: type, leaf: str) -> None:
-    """Build ``section`` with NaN in ``leaf`` (no range admits NaN), defaults elsewhere."""
-    if section is MechanismConfig:
-        return
+    """Build ``section`` with NaN in ``leaf`` (no range admits NaN; a list field: a list of NaN),
+    defaults elsewhere. The mechanism's section is built with a built-in mechanism's name, its one
+    required field (the ranges of its own fields are the same for every mechanism); a bound of the
+    design box is checked there too."""
+    from kinematics import MECHANISMS
+
+    nan = float("nan")
+    value: object = [nan, nan] if _is_list(_field_types(section).get(leaf)) else nan
+    first = next(iter(MECHANISMS))
+    if section is DesignSpace and leaf in ("lower", "upper"):
+        n = len(MECHANISMS[first].design_variables)
+        section, leaf, value = MechanismConfig, "design", DesignSpace(**{leaf: [nan] * n})
+    required = {"name": first} if section is MechanismConfig and leaf != "name" else {}
     try:
-        section(**{leaf: float("nan")})
+        section(**required, **{leaf: value})
     except ConfigError:
         raise
     except Exception:  # noqa: BLE001 - a section that cannot be built alone (required fields): no range known
         return
 
 
+def _is_list(hint: object) -> bool:
+    return "list" in str(hint).lower()
+
+
 def _type_words(hint: object) -> str:
     text = str(hint)
+    if _is_list(hint):
+        return "a list of numbers" if "float" in text or "int" in text else "a list"
     if hint is bool or "bool" in text:
         return "true or false"
     if hint is int or "int" in text:

@@ -18,6 +18,11 @@ from pipeline.objectives import OBJECTIVES
 from pipeline.optimizers import OPTIMIZERS
 from pipeline.store.runs import launch_id
 
+#: what a group option that is not a complete config needs, shown beside it where the options are listed
+OPTION_NOTES = {
+    ("mechanism", "path"): "a Mechanism class of your own: also set mechanism.name=package.module:Class",
+}
+
 
 def register_configs() -> None:
     """Register the schema and the generated group options in Hydra's ConfigStore (idempotent)."""

@@ -30,6 +30,8 @@ BACKENDS = ("loky", "threading", "multiprocessing", "dask")
 EVALUATE_METHODS = ("grid", "midpoint")
 #: kinds of run: real studies, quick looks and tests (``+debug=fast``), speed measurements
 PURPOSES = ("study", "debug", "benchmark")
+#: the largest ``evaluate.max_hours`` (a run's estimated wall time, hours)
+MAX_HOURS = 10_000
 _PLAIN_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,99}$")
 
 
@@ -104,7 +106,10 @@ class EvaluateConfig:
         check("evaluate.refine_factor", self.refine_factor, 1 <= self.refine_factor <= 8, "an integer in [1, 8]")
         check("evaluate.max_nodes", self.max_nodes, 1_000 <= self.max_nodes <= 10**9, "an integer in [1000, 1e9]")
         check(
-            "evaluate.max_hours", self.max_hours, finite(self.max_hours) and 0 < self.max_hours <= 10_000, "(0, 10000]"
+            "evaluate.max_hours",
+            self.max_hours,
+            finite(self.max_hours) and 0 < self.max_hours <= MAX_HOURS,
+            f"(0, {MAX_HOURS}]",
         )
 
 

@@ -11,12 +11,13 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import math
 import socket
 
 from omegaconf import DictConfig, OmegaConf, open_dict
-from omegaconf.errors import OmegaConfBaseException
+from omegaconf.errors import MissingMandatoryValue, OmegaConfBaseException
 
-from pipeline.config.schema import Config, ParallelConfig
+from pipeline.config.schema import MAX_HOURS, Config, ParallelConfig
 from pipeline.config.suggest import did_you_mean
 from pipeline.errors import ConfigError, check, check_writable
 from pipeline.optimizers import OPTIMIZERS
@@ -67,6 +68,8 @@ def validate(cfg: DictConfig | Config) -> Config:
                 with open_dict(cfg):
                     del cfg["hydra"]
             typed = OmegaConf.to_object(cfg)
+        except MissingMandatoryValue as exc:
+            raise ConfigError(_missing_message(getattr(exc, "full_key", None) or "config")) from None
         except OmegaConfBaseException as exc:
             key = getattr(exc, "full_key", None) or "config"
             raise ConfigError(f"{key} is invalid: {str(exc).splitlines()[0]}") from None
@@ -78,6 +81,19 @@ def validate(cfg: DictConfig | Config) -> Config:
     for key in ("output_dir", "cache_dir", "dataset_dir"):
         check_writable(f"paths.{key}", getattr(typed.paths, key))
     return typed
+
+
+def _missing_message(key: str) -> str:
+    """A required value left unset (``???``): which key to set, and what it takes."""
+    if key == "mechanism.name":
+        from kinematics import MECHANISMS
+
+        return (
+            "mechanism.name is missing: mechanism=path takes a Mechanism class of your own by its path; "
+            "allowed: mechanism.name=package.module:Class (importable), or a built-in mechanism "
+            f"with mechanism=NAME ({', '.join(MECHANISMS)})"
+        )
+    return f"{key} is missing: allowed {key}=VALUE (it has no default)"
 
 
 def _check_budget(c: Config) -> None:
@@ -106,14 +122,39 @@ def _check_budget(c: Config) -> None:
             f"{refined_nodes:.3g} nodes > evaluate.max_nodes={c.evaluate.max_nodes})"
         )
     evaluations = c.sample.n + OPTIMIZERS[c.optimizer.name](c.optimizer).expected_evaluations()
-    throughput = NODES_PER_SECOND / METHOD_COST[method]
-    hours = evaluations * float(res) ** n_axes / (throughput * c.parallel.n_jobs) / 3600
-    if hours > c.evaluate.max_hours:
-        raise ConfigError(
-            f"evaluate.resolution={res} is invalid: the run is estimated at {hours:.3g} h "
-            f"> evaluate.max_hours={c.evaluate.max_hours} ({evaluations} evaluations of "
-            f"{float(res) ** n_axes:.3g} nodes at {throughput:.0e} nodes/s/worker, method {method})"
+    # nodes per second of the whole run: the method's per-worker throughput x the workers
+    rate = NODES_PER_SECOND / METHOD_COST[method] * c.parallel.n_jobs
+    hours = evaluations * float(res) ** n_axes / rate / 3600
+    if hours <= c.evaluate.max_hours:
+        return
+    # the estimate spans fields: it grows with evaluate.resolution (nodes per evaluation), sample.n
+    # and the optimiser's budget (evaluations), and falls with parallel.n_jobs; the message names
+    # the bound and the resolution, and each change that would pass
+    top = int((c.evaluate.max_hours * 3600 * rate / evaluations) ** (1 / n_axes))
+    while top > 0 and evaluations * float(top) ** n_axes / rate / 3600 > c.evaluate.max_hours:
+        top -= 1
+    needed = _round_up(hours)
+    fixes = [f"evaluate.max_hours >= {needed:g}"] if needed <= MAX_HOURS else []
+    if top >= (1 if c.evaluate.allow_coarse else mech.min_resolution):
+        fixes.append(f"evaluate.resolution <= {top}")
+    elif top >= 1:
+        fixes.append(
+            f"evaluate.resolution <= {top} with evaluate.allow_coarse=true (below {c.mechanism.name}'s minimum)"
         )
+    fixes.append("fewer evaluations (sample.n, the optimizer's budget) or more parallel.n_jobs")
+    default = "" if c.evaluate.resolution is not None else f" (the default of {c.mechanism.name}, method {method})"
+    raise ConfigError(
+        f"evaluate.max_hours={c.evaluate.max_hours:g} is invalid: the run at evaluate.resolution={res}{default} "
+        f"is estimated at {hours:.3g} h ({evaluations} evaluations of {float(res) ** n_axes:.3g} nodes "
+        f"at {NODES_PER_SECOND / METHOD_COST[method]:.0e} nodes/s/worker x parallel.n_jobs={c.parallel.n_jobs}); "
+        f"allowed: {', or '.join(fixes)}"
+    )
+
+
+def _round_up(hours: float) -> float:
+    """``hours`` rounded up to 2 significant digits (a bound that passes the check)."""
+    step = 10.0 ** (math.floor(math.log10(hours)) - 1)
+    return float(f"{math.ceil(hours / step) * step:.2g}") if hours > 0 else hours
 
 
 def _check_kernels() -> None:

@@ -1,7 +1,7 @@
 """Parquet I/O: atomic writes, the config in the schema metadata, units in the field metadata.
 
-:data:`COLUMNS` is the column dictionary of every table (README prints it):
-unit and meaning. Each file's schema metadata holds the resolved config
+:data:`COLUMNS` is the column dictionary of every table (docs/configuration.md prints it):
+unit and meaning; a ``<var>_...`` entry stands for one column per design variable. Each file's schema metadata holds the resolved config
 (JSON), the package version and the git commit.
 
 Units rule (one unit per column, whatever mechanisms a dataset mixes)
@@ -43,6 +43,11 @@ from pipeline.store.cache import __version__
 META_CONFIG = b"pm_design.config"
 META_VERSION = b"pm_design.version"
 META_COMMIT = b"pm_design.git_commit"
+
+#: stands for a design variable's name in a column of :data:`COLUMNS` that exists once per design
+#: variable (``<var>_reference`` is ``d_ratio_reference``, ... for H4); such a column has the variable's
+#: unit, and its meaning (which says "the design variable", never the placeholder) names the variable
+VARIABLE = "<var>"
 
 #: name -> (unit, meaning); "volume_unit" means the unit named in that row's volume_unit column
 COLUMNS: dict[str, tuple[str, str]] = {
@@ -122,8 +127,28 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "reference_gap_label": ("", "the gap as reported: 'within error (< e %)' or 'g % ± e %'"),
     "reference_found_by": ("", "the search that found the reference optimum and how many searches agree"),
     "reference_evaluations": ("", "objective evaluations of the reference searches (not in n_evaluations)"),
+    VARIABLE + "_reference": (
+        "the design variable's",
+        "the design variable at the reference optimum (in best, one column per design variable; null if no "
+        "reference was run)",
+    ),
     "flat_variables": ("", "design variables along which the objective is flat at the optimum (the optimum is a set)"),
-    "eta": ("1", "mixed index eta = w_d GDI + (1 - w_d) SURI at the row's w_d (seed 000 eq. 36)"),
+    VARIABLE + "_flat_lower": (
+        "the design variable's",
+        "lower end of the interval of the design variable (the others held at the optimum) over which the "
+        "objective stays within a relative 1e-9 of the optimum's value (in best, one column per design "
+        "variable; the optimum's value of the variable if it is not flat)",
+    ),
+    VARIABLE + "_flat_upper": (
+        "the design variable's",
+        "upper end of the interval of the design variable over which the objective is flat at the optimum "
+        "(as for the lower end; in best, one column per design variable)",
+    ),
+    "eta": (
+        "1",
+        "mixed index eta = w_d GDI + (1 - w_d) SURI at the row's w_d (seed 000 eq. 36); only in the file "
+        "of pm-design evaluate --parquet (in a run's tables: objective_value when objective = mixed)",
+    ),
     "status": ("", "run status from its manifest: complete"),
     "wall_time": ("s", "wall time of the run"),
     "source": ("", "run directory the dataset row was read from"),
@@ -160,13 +185,12 @@ def column_unit(name: str, units: dict[str, str] | None = None) -> tuple[str, st
         return units[name], "design variable or mechanism parameter"
     if name in COLUMNS:
         return COLUMNS[name]
-    for suffix, meaning in (
-        ("_flat_lower", "lower end of the flat interval"),
-        ("_flat_upper", "upper end of the flat interval"),
-        ("_reference", "design of the reference optimum"),
-    ):
-        if name.endswith(suffix) and name[: -len(suffix)] in units:
-            return units[name[: -len(suffix)]], meaning
+    for pattern, (_, meaning) in COLUMNS.items():
+        if pattern.startswith(VARIABLE):
+            suffix = pattern[len(VARIABLE) :]
+            variable = name[: -len(suffix)]
+            if name.endswith(suffix) and variable in units:
+                return units[variable], meaning.replace("the design variable", f"the design variable {variable}", 1)
     if name.startswith("param_"):
         stem = name[len("param_") :]
         for unit in PARAM_UNITS:
