@@ -17,6 +17,7 @@ reports against the true error), and the new method's cost phase by phase (:func
 from __future__ import annotations
 
 import cProfile
+import json
 import math
 import pstats
 import time
@@ -29,6 +30,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.ticker import NullFormatter  # noqa: E402
 
+from benchmarks.best_known import GOLDEN  # noqa: E402
 from kinematics import MECHANISMS, get_mechanism  # noqa: E402
 from kinematics.workspace import default_resolution, evaluate  # noqa: E402
 
@@ -59,6 +61,13 @@ PAPER = {
     "delta": dict(R=200.0, r=50.0, la=200.0, lb=400.0),
     "gough_stewart": dict(r_base=400.0, r_platform=250.0, sep_base=30.0, sep_platform=30.0, height=700.0),
 }
+
+
+def best_known_design(problem: str) -> list[float]:
+    """The design vector of ``problem``'s best known optimum (benchmarks/best_known.json)."""
+    return [float(v) for v in json.loads(GOLDEN.read_text())[problem]["design"].values()]
+
+
 #: documented optima: keyword arguments of ``get_mechanism`` (docs/reproduction.md) or design vectors
 #: (``from_design``: benchmarks/best_known.json, docs/reproduction.md's trade-off)
 OPTIMA: dict[str, list[dict | list[float]]] = {
@@ -66,7 +75,7 @@ OPTIMA: dict[str, list[dict | list[float]]] = {
     # the best known (benchmarks/best_known.json), then two optima of the cell count it replaced
     "tricept": [dict(a=200.0, b=300.0, d=200.0), dict(a=200.1, b=300.0, d=191.3), dict(a=203.6, b=303.4, d=186.2)],
     # rpr3_mixed's best known (w_d = 0.5), and the trade-off's w_d = 1 optimum
-    "rpr3": [[100.0, 93.34218148345319], [128.2046, 100.0]],
+    "rpr3": [best_known_design("rpr3_mixed"), [128.2046, 100.0]],
     "rpr2": [[8.774, 3.0]],  # the trade-off's w_d = 0.5 optimum
 }
 

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from benchmarks.accuracy import OPTIMA, optimum
+from benchmarks.accuracy import OPTIMA, best_known_design, optimum
 from kinematics import MECHANISMS, get_mechanism
 from kinematics.annuli import planar_legs_signed_inverse_condition
 from kinematics.workspace import SECTION_NODES, SECTIONS, _cube_fraction, _multisect, default_resolution, evaluate
@@ -247,10 +247,10 @@ def test_default_resolution_within_0p1_percent_of_a_fine_reference(name, label):
 #: where :func:`eta_along_a_line` walks: a documented optimum (design vector) and the variable
 #: walked (one inside its bounds); the Delta has none documented: the middle of its design box
 LINES = {
-    "h4": ([0.09934936833917764, 0.1499996040304996, 0.35000000000001597], 0),  # h4_mixed's best known
-    "tricept": ([200.1, 300.0, 191.3], 2),  # OPTIMA["tricept"][1]: a max-volume optimum of the cell count
-    "rpr3": (OPTIMA["rpr3"][0], 1),  # rpr3_mixed's best known
-    "rpr2": (OPTIMA["rpr2"][0], 0),  # the trade-off's w_d = 0.5 optimum
+    "h4": (best_known_design("h4_mixed"), 0),  # d_ratio
+    "tricept": (list(OPTIMA["tricept"][1].values()), 2),  # a max-volume optimum of the cell count; d
+    "rpr3": (OPTIMA["rpr3"][0], 1),  # rpr3_mixed's best known; platform_side
+    "rpr2": (OPTIMA["rpr2"][0], 0),  # the trade-off's w_d = 0.5 optimum; b
 }
 
 

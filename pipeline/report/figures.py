@@ -90,7 +90,6 @@ def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
                     label=f"{'after polish' if polished else 'reported'}: {reported:.4g}"
                     + (" (mean)" if n_seeds > 1 else ""),
                 )
-                final = reported
             ref = (
                 runs.loc[runs["run_id"].isin(frame["run_id"].unique()), "reference_value"]
                 if "reference_value" in runs

@@ -18,6 +18,7 @@ from kinematics.workspace import evaluate
 from pipeline.report.tables import rel, table
 from pipeline.reproduction.driver import Reproduction
 from pipeline.reproduction.readings import H4_PAPER
+from pipeline.stages.optimise import gap_label, group_gap_label
 
 #: the experiments of Tables 1-3 (h4_table3 sweeps w_d as well as the seeds)
 TABLE_EXPERIMENTS = ("h4_table1", "h4_table2", "h4_table3")
@@ -109,16 +110,18 @@ def h4_table_runs(r: Reproduction, extra: tuple[str, ...] = ()) -> dict[str, pd.
 
 
 def gap_rows(frames: dict[str, pd.DataFrame]) -> list[list]:
-    """The paper GA against the reference optimum (IPOP-CMA-ES + polish), per study."""
+    """The paper GA against the reference optimum (the best of several searches), per study: the
+    gaps as labelled everywhere (:func:`pipeline.stages.optimise.gap_label`, with their errors)."""
     rows = []
     for label, frame in frames.items():
+        worst = frame.loc[frame["reference_gap"].idxmax()]
         rows.append(
             [
                 label,
                 f"{frame['objective_value'].mean():.6g}",
                 f"{frame['reference_value'].max():.6g}",
-                f"{100 * frame['reference_gap'].mean():.2f} %",
-                f"{100 * frame['reference_gap'].max():.2f} %",
+                group_gap_label(frame),
+                gap_label(float(worst["reference_gap"]), float(worst["reference_gap_error"])),
                 ", ".join(sorted(set(";".join(frame["at_bounds"]).split(";")) - {""})) or "none",
             ]
         )

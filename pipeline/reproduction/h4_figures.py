@@ -11,7 +11,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from kinematics import get_mechanism
+from kinematics import MECHANISMS, get_mechanism
 from pipeline.report.tables import table
 from pipeline.reproduction.driver import Reproduction
 from pipeline.stages.plot import plot_convergence, plot_workspace
@@ -100,10 +100,13 @@ def h4_sweep(r: Reproduction) -> pd.DataFrame:
     volume = sweep["volume"].to_numpy()
     jump = int(np.argmax(np.abs(np.diff(volume))))
     w_a, w_b = float(sweep["w_d"].iloc[jump]), float(sweep["w_d"].iloc[jump + 1])
-    ratios = ["d_ratio", "h_ratio", "Qz_ratio"]
-    design_a, design_b = (", ".join(f"{float(sweep[c].iloc[k]):.4f}" for c in ratios) for k in (jump, jump + 1))
+    variables = MECHANISMS["h4"].design_variables  # (d, h, Qz) / stroke
+    design_a, design_b = (", ".join(f"{float(sweep[v.name].iloc[k]):.4f}" for v in variables) for k in (jump, jump + 1))
     # a switch between families of designs: some design variable moves by a tenth of its range or more
-    moved = max(abs(float(sweep[c].iloc[jump + 1]) - float(sweep[c].iloc[jump])) for c in ratios)
+    moved = max(
+        abs(float(sweep[v.name].iloc[jump + 1]) - float(sweep[v.name].iloc[jump])) / (v.upper - v.lower)
+        for v in variables
+    )
     claim = (
         f"in our model the optimum's volume first falls below half of its w_d = 0 value at w_d = {first:.2f}"
         if first is not None
@@ -117,7 +120,7 @@ def h4_sweep(r: Reproduction) -> pd.DataFrame:
     )
     claim += (
         ": the weighted sum switches from one family of designs to another instead of moving smoothly"
-        if moved >= 0.1 * 0.14  # the narrowest ratio's range (d/Δq, h/Δq in [0.01, 0.15])
+        if moved >= 0.1
         else ": a steep change of V along one family of designs, not a switch between families"
     )
     r.add(f"""
