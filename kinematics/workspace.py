@@ -569,8 +569,10 @@ def _refined_crossing(
     smooth (H4's bounds of the z interval take the root of the rod's reach, infinitely steep at
     its boundary) and ``tm`` lies next to an end, its curvature is huge and the dip a spurious
     root anywhere on the edge, which came and went as the design moved (a step in V of 1.6e-4
-    at H4's optimum). Within a bracket the root moves continuously (to ``tm`` as the middle value
-    goes to zero, from either side)."""
+    at H4's optimum). Within a bracket the root moves continuously; where the outside value is
+    negative it goes to ``tm`` as the middle value goes to zero, from either side. A margin that
+    only touches zero at ``tm`` (an outside pocket opening in the middle of the edge) still moves
+    the first crossing by a jump, as the first boundary along the edge itself does."""
     n = dex_in.size
     g0 = _stacked(reach[:n][rows], dex_in[rows])
     g1 = _stacked(reach[n:][rows], dex_out[rows])
