@@ -124,14 +124,18 @@ def _check_budget(c: Config) -> None:
     evaluations = c.sample.n + OPTIMIZERS[c.optimizer.name](c.optimizer).expected_evaluations()
     # nodes per second of the whole run: the method's per-worker throughput x the workers
     rate = NODES_PER_SECOND / METHOD_COST[method] * c.parallel.n_jobs
-    hours = evaluations * float(res) ** n_axes / rate / 3600
+
+    def hours_at(resolution: int) -> float:
+        return evaluations * float(resolution) ** n_axes / rate / 3600
+
+    hours = hours_at(res)
     if hours <= c.evaluate.max_hours:
         return
     # the estimate spans fields: it grows with evaluate.resolution (nodes per evaluation), sample.n
     # and the optimiser's budget (evaluations), and falls with parallel.n_jobs; the message names
     # the bound and the resolution, and each change that would pass
     top = int((c.evaluate.max_hours * 3600 * rate / evaluations) ** (1 / n_axes))
-    while top > 0 and evaluations * float(top) ** n_axes / rate / 3600 > c.evaluate.max_hours:
+    while top > 0 and hours_at(top) > c.evaluate.max_hours:
         top -= 1
     needed = _round_up(hours)
     fixes = [f"evaluate.max_hours >= {needed:g}"] if needed <= MAX_HOURS else []

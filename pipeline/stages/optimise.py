@@ -216,11 +216,16 @@ def reference_stage(
     }
 
 
+def within_error(gap: float, gap_error: float) -> bool:
+    """Whether a relative gap to the reference is no larger than its error (both fractions)."""
+    return bool(gap <= gap_error)
+
+
 def gap_label(gap: float, gap_error: float) -> str:
     """A relative gap to the reference as reported everywhere (best.parquet, log, figures, report):
-    "within error (< e %)" where ``gap <= gap_error`` (its percentage is not quoted), else
+    "within error (< e %)" where :func:`within_error` (its percentage is not quoted), else
     "g % ± e %". ``gap``, ``gap_error``: fractions of the reference's value."""
-    if gap <= gap_error:
+    if within_error(gap, gap_error):
         return f"within error (< {100 * gap_error:.2g} %)"
     return f"{100 * gap:.3g} % ± {100 * gap_error:.2g} %"
 
@@ -262,7 +267,7 @@ def reference_columns(best: dict, reference: dict | None, names: list[str]) -> d
     scale = abs(reference["value"]) or 1.0
     gap = (reference["value"] - best["objective_value"]) / scale
     gap_error = (best["objective_error"] + reference["error"]) / scale
-    within = bool(gap <= gap_error)
+    within = within_error(gap, gap_error)
     label = gap_label(gap, gap_error)
     out = {
         "reference_value": float(reference["value"]),

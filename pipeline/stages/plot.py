@@ -168,7 +168,7 @@ def plot_convergence(
     """
     fig, (ax,) = _figure(6, 4)
     # best so far (objectives are maximised): a restart of IPOP-CMA-ES lowers the generation's
-    # best without losing the run's; the gap is the run's best against the reference
+    # best without losing the run's
     so_far = history["best"].cummax()
     ax.plot(history["generation"], so_far, label="best so far")
     ax.plot(history["generation"], history["best"], label="best of the generation", lw=0.8, alpha=0.6)
@@ -179,7 +179,6 @@ def plot_convergence(
         step = "after polish" if found_by == "polish" else f"reported ({found_by})" if found_by else "reported"
         ax.plot([last, last + 0.5], [final, optimum], ":", color="C0", lw=1)
         ax.plot([last + 0.5], [optimum], "*", color="C3", ms=11, label=f"{step}: {optimum:.6g}")
-        final = float(optimum)
     if reference is not None and np.isfinite(reference):
         label = f"reference optimum {reference:.6g}" + (f" (gap {gap})" if gap else "")
         ax.axhline(reference, color="k", ls="--", lw=1, label=label)
