@@ -581,10 +581,12 @@ def _refined_crossing(
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         c2 = ((gm - g0) - t * (g1 - g0)) / (t * (t - 1.0))
         c1 = g1 - g0 - c2
-        # roots of g0 + c1 s + c2 s^2 in the stable form 2 g0 / (-c1 -+ sqrt(disc))
+        # roots of g0 + c1 s + c2 s^2 as q / c2 and g0 / q, q = -(c1 + sign(c1) sqrt(disc)) / 2: no
+        # cancellation in q, and a root at s = 0 (g0 = 0: a node on a margin's surface) is g0 / q = 0,
+        # where the form 2 g0 / (-c1 -+ sqrt(disc)) gave 0 / 0 for the other root
         disc = c1 * c1 - 4.0 * c2 * g0
-        root = np.sqrt(np.where(disc >= 0, disc, np.nan))
-        both = np.stack([2.0 * g0 / (-c1 - root), 2.0 * g0 / (-c1 + root)])
+        q = -0.5 * (c1 + np.copysign(np.sqrt(np.where(disc >= 0, disc, np.nan)), c1))
+        both = np.stack([q / c2, g0 / q])
         early = gm < 0.0  # the sign changes before tm, else (g1 < 0) after it
         lo = np.where(early, 0.0, t)
         hi = np.where(early, t, 1.0)
@@ -664,8 +666,8 @@ def _refined_crossing_compiled(reach, reach_mid, dex_in, dex_mid, dex_out, rows,
                 disc = c1 * c1 - 4.0 * c2 * a
                 root = np.inf
                 if disc >= 0.0:
-                    sq = math.sqrt(disc)
-                    for s in (2.0 * a / (-c1 - sq), 2.0 * a / (-c1 + sq)):
+                    qq = -0.5 * (c1 + math.copysign(math.sqrt(disc), c1))
+                    for s in (qq / c2, a / qq):
                         if s >= lo and s <= hi and s < root:
                             root = s
                 if root == np.inf:  # rounding at a bracket's end: the line between its two values
@@ -1496,7 +1498,7 @@ def _integrate_sections(mechanism, resolution, orientation, min_ic, length):
     n_y = max(int(math.ceil(SECTION_NODES[1] * resolution)), 2)
     hy = (float(hi[ty]) - float(lo[ty])) / n_y
     if angular and orientation[1] > orientation[0]:
-        n_a = max(int(resolution * SECTION_NODES[0]), 1)
+        n_a = max(int(math.ceil(SECTION_NODES[0] * resolution)), 1)  # rounded up, as the rows
         ha = (orientation[1] - orientation[0]) / n_a
         layers = orientation[0] + ha * (np.arange(n_a) + 0.5)
     else:

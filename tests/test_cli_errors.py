@@ -110,6 +110,10 @@ def test_every_spelling_of_nan_and_inf_names_the_field_and_its_range(key, allowe
         (["mechanism.orientation=[.nan,10]"], "null or [lo, hi] in degrees"),
         (["mechanism.design.lower=[.nan,0.01,0.35]"], "finite numbers with lower < upper"),
         (["mechanism=rpr2", "mechanism.design.upper=[.inf,6]"], "finite numbers with lower < upper"),
+        # a scalar where a list is due: OmegaConf's "Invalid value assigned", not "Value '...'"
+        (["mechanism.orientation=.nan"], "null or [lo, hi] in degrees"),
+        (["mechanism.orientation=3"], "null or [lo, hi] in degrees"),
+        (["mechanism.design.lower=.nan"], "finite numbers with lower < upper"),
     ],
 )
 def test_a_list_with_yaml_s_nan_names_the_field_and_what_it_takes(argv, allowed, capsys):
@@ -140,12 +144,12 @@ def test_the_time_budget_names_the_bound_the_resolution_and_what_passes(tmp_path
     # each change the message allows passes the check
     hours = err.split("allowed: evaluate.max_hours >= ", 1)[1].split(",", 1)[0]
     precheck_overrides([f"evaluate.max_hours={hours}"])
-    err = _refused(["evaluate.resolution=39", "evaluate.max_hours=0.01"], capsys)
-    assert err.startswith("error: evaluate.max_hours=0.01 is invalid: the run at evaluate.resolution=39 is"), err
+    err = _refused(["evaluate.resolution=39", "evaluate.max_hours=0.05"], capsys)
+    assert err.startswith("error: evaluate.max_hours=0.05 is invalid: the run at evaluate.resolution=39 is"), err
     top = err.split("evaluate.resolution <= ", 1)[1].split(",", 1)[0]
     assert "allow_coarse" not in err, err
-    precheck_overrides([f"evaluate.resolution={top}", "evaluate.max_hours=0.01"])
-    assert "is estimated at" in _refused([f"evaluate.resolution={int(top) + 1}", "evaluate.max_hours=0.01"], capsys)
+    precheck_overrides([f"evaluate.resolution={top}", "evaluate.max_hours=0.05"])
+    assert "is estimated at" in _refused([f"evaluate.resolution={int(top) + 1}", "evaluate.max_hours=0.05"], capsys)
 
 
 @pytest.mark.parametrize(
@@ -214,3 +218,25 @@ def test_evaluate_s_parquet_has_the_dataset_s_integer_columns(tmp_path, capsys):
     table = pd.read_parquet(out)
     for column in ("n_samples", "n_inside", "resolution"):
         assert table[column].dtype == "int64", (column, table[column].dtype)
+
+
+def test_the_node_budget_allows_the_resolution_that_fills_it_exactly(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    # 8000 = 20^3 nodes: 20 passes, though 8000 ** (1 / 3) is 19.999... in floating point
+    budget = ["evaluate.max_nodes=8000", "evaluate.refine_factor=1", "+debug=fast"]
+    precheck_overrides([*budget, "evaluate.resolution=20"])
+    err = _refused([*budget, "evaluate.resolution=21"], capsys)
+    assert "allowed <= 20 for h4" in err, err
+
+
+def test_the_time_budget_counts_the_reference_optimum_s_evaluations(tmp_path, monkeypatch, capsys):
+    from pipeline.optimizers.reference import expected_evaluations
+
+    monkeypatch.chdir(tmp_path)
+    bound = ["evaluate.resolution=39", "evaluate.max_hours=0.01"]
+    alone = _refused([*bound, "optimizer.reference=false"], capsys)
+    with_reference = _refused([*bound, "optimizer.reference=true"], capsys)
+    spent = int(alone.split("h (", 1)[1].split(" evaluations", 1)[0])
+    reference = expected_evaluations(3)
+    assert f"h ({spent + reference} evaluations of 5.93e+04 nodes, {reference} of them the reference" in with_reference
+    assert "optimizer.reference=false" in with_reference and "optimizer.reference=false" not in alone

@@ -143,3 +143,33 @@ def test_the_gap_of_several_seeds_is_labelled_as_one_run_is():
     assert group_gap_label(runs.assign(reference_gap_error=0.05)) == "within error (< 5 %) (mean of 2)"
     assert group_gap_label(runs.assign(reference_gap=np.nan)) == ""
     assert group_gap_label(pd.DataFrame({"objective_value": [1.0]})) == ""  # no reference columns
+
+
+def test_a_run_better_than_the_reference_says_so():
+    """A negative gap beyond its error is no "within error": the reference is not the best known."""
+    from pipeline.stages.optimise import gap_label, group_gap_label, within_error
+
+    assert not within_error(-0.05, 0.001) and within_error(-0.0005, 0.001)
+    assert gap_label(-0.05, 0.001) == "beats the reference by 5 % ± 0.1 %"
+    assert gap_label(-0.0005, 0.001) == "within error (< 0.1 %)"
+    reference = {"value": 2.0, "x": [1.0, 2.0], "found_by": "grid", "n_evaluations": 10, "error": 0.001}
+    better = reference_columns({"objective_value": 2.1, "objective_error": 0.001}, reference, ["a", "b"])
+    assert not better["reference_gap_within_error"]
+    assert better["reference_gap_label"] == "beats the reference by 5 % ± 0.1 %"
+    # one run 1 % behind, one 1 % ahead: their mean (0) would read "within error"
+    straddle = pd.DataFrame({"reference_gap": [0.01, -0.01], "reference_gap_error": [0.001, 0.001]})
+    assert group_gap_label(straddle) == "-1 % to 1 % ± 0.1 % (2 runs)"
+    ahead = pd.DataFrame({"reference_gap": [-0.01, -0.03], "reference_gap_error": [0.001, 0.002]})
+    assert group_gap_label(ahead) == "beats the reference by 2 % ± 0.2 % (mean of 2)"
+
+
+@pytest.mark.parametrize("n_var", [2, 3])
+def test_the_reference_s_evaluation_estimate_bounds_what_it_spends(n_var):
+    # the time budget of a run with optimizer.reference=true adds this estimate (pipeline.config.validate)
+    from pipeline.optimizers.reference import best_known, expected_evaluations
+
+    problem = Problem(
+        lambda x: -np.sum((x - 0.3) ** 2, axis=1) + 0.1 * np.cos(20 * x).sum(axis=1), np.zeros(n_var), np.ones(n_var)
+    )
+    spent = best_known(problem).n_evaluations
+    assert 0.5 * expected_evaluations(n_var) <= spent <= expected_evaluations(n_var)

@@ -245,3 +245,20 @@ def test_chunked_grid_equals_one_chunk(monkeypatch, chunk):
     assert chunked.n_inside == reference.n_inside
     assert chunked.volume == pytest.approx(reference.volume, rel=1e-12)
     assert chunked.gdi == pytest.approx(reference.gdi, rel=1e-12)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_a_crossing_next_to_a_margin_that_is_zero_at_the_inside_end(compiled):
+    """The margin g(s) = -4 s (s - 1/2) along an edge (0 at the inside node, positive at the look
+    s = 1/4, negative outside) crosses at 1/2; a root formula dividing g(0) by a difference that is
+    also 0 there lost it and took the line through the last two samples (1/3)."""
+    from kinematics import workspace
+
+    def margin(s):
+        return -4.0 * s * (s - 0.5)
+
+    crossing = workspace._refined_crossing_compiled if compiled else workspace._refined_crossing
+    reach = np.array([[margin(0.0)], [margin(1.0)]])  # (2 n, K): inside ends, then outside ends
+    ok = np.ones(1)  # a dexterity margin positive everywhere
+    first, which = crossing(reach, np.array([[margin(0.25)]]), ok, ok, ok, np.array([0]), np.array([0.25]))
+    assert first[0] == pytest.approx(0.5, abs=1e-15) and which[0] == 0

@@ -24,7 +24,9 @@ from pipeline.config.suggest import did_you_mean, key_suggestion
 from pipeline.errors import ConfigError
 
 _UNKNOWN_KEY = (re.compile(r"Could not override '([^']+)'"), re.compile(r"Key '([^']+)' is not in struct"))
-_BAD_VALUE = re.compile(r"Error merging override ([^=\s]+)=(.*?): Value '", re.DOTALL)
+#: a value of the wrong type: a scalar's (``Value '...' could not be converted``) or a scalar given for a
+#: list (``Invalid value assigned: str is not a ListConfig``)
+_BAD_VALUE = re.compile(r"Error merging override ([^=\s]+)=(.*?): (?:Value '|Invalid value assigned)", re.DOTALL)
 
 
 def explain(exc: BaseException, overrides: Sequence[str], compose: Callable[[list[str]], DictConfig]) -> str | None:

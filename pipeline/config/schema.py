@@ -92,7 +92,8 @@ class EvaluateConfig:
     allow_coarse: bool = False
     #: nodes of one evaluation, refined one included (memory and time budget)
     max_nodes: int = 4_000_000
-    #: estimated wall time of the run, hours (checked before work)
+    #: estimated wall time of the run, hours (checked before work; the optimiser, its polish and,
+    #: with optimizer.reference, the reference optimum's searches)
     max_hours: float = 12.0
 
     def __post_init__(self) -> None:

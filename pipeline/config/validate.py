@@ -13,6 +13,7 @@ import copy
 import dataclasses
 import math
 import socket
+from collections.abc import Callable
 
 from omegaconf import DictConfig, OmegaConf, open_dict
 from omegaconf.errors import MissingMandatoryValue, OmegaConfBaseException
@@ -21,6 +22,7 @@ from pipeline.config.schema import MAX_HOURS, Config, ParallelConfig
 from pipeline.config.suggest import did_you_mean
 from pipeline.errors import ConfigError, check, check_writable
 from pipeline.optimizers import OPTIMIZERS
+from pipeline.optimizers.reference import expected_evaluations as reference_evaluations
 
 #: conservative grid throughput (nodes/s per worker) for the run-time estimate (midpoint count)
 NODES_PER_SECOND = 1.0e6
@@ -115,13 +117,21 @@ def _check_budget(c: Config) -> None:
     res = res or default_resolution(mech, orientation, None, method)
     refined_nodes = float(res * c.evaluate.refine_factor) ** n_axes
     if refined_nodes > c.evaluate.max_nodes:
-        top = int(c.evaluate.max_nodes ** (1 / n_axes) / c.evaluate.refine_factor)
+        top = _largest_resolution(
+            c.evaluate.max_nodes ** (1 / n_axes) / c.evaluate.refine_factor,
+            lambda r: (r * c.evaluate.refine_factor) ** n_axes <= c.evaluate.max_nodes,
+        )
         raise ConfigError(
             f"evaluate.resolution={res} is invalid: allowed <= {top} for {c.mechanism.name} "
             f"({n_axes} sampled axes x refine_factor {c.evaluate.refine_factor} give "
             f"{refined_nodes:.3g} nodes > evaluate.max_nodes={c.evaluate.max_nodes})"
         )
     evaluations = c.sample.n + OPTIMIZERS[c.optimizer.name](c.optimizer).expected_evaluations()
+    evaluations += c.optimizer.polish_evaluations if c.optimizer.polish else 0
+    # the reference optimum is computed once per problem, by the first run that asks for it: the
+    # estimate is that run's
+    reference = reference_evaluations(len(c.mechanism.design.lower)) if c.optimizer.reference else 0
+    evaluations += reference
     # nodes per second of the whole run: the method's per-worker throughput x the workers
     rate = NODES_PER_SECOND / METHOD_COST[method] * c.parallel.n_jobs
 
@@ -134,9 +144,10 @@ def _check_budget(c: Config) -> None:
     # the estimate spans fields: it grows with evaluate.resolution (nodes per evaluation), sample.n
     # and the optimiser's budget (evaluations), and falls with parallel.n_jobs; the message names
     # the bound and the resolution, and each change that would pass
-    top = int((c.evaluate.max_hours * 3600 * rate / evaluations) ** (1 / n_axes))
-    while top > 0 and hours_at(top) > c.evaluate.max_hours:
-        top -= 1
+    top = _largest_resolution(
+        (c.evaluate.max_hours * 3600 * rate / evaluations) ** (1 / n_axes),
+        lambda r: hours_at(r) <= c.evaluate.max_hours,
+    )
     needed = _round_up(hours)
     fixes = [f"evaluate.max_hours >= {needed:g}"] if needed <= MAX_HOURS else []
     if top >= (1 if c.evaluate.allow_coarse else mech.min_resolution):
@@ -145,14 +156,28 @@ def _check_budget(c: Config) -> None:
         fixes.append(
             f"evaluate.resolution <= {top} with evaluate.allow_coarse=true (below {c.mechanism.name}'s minimum)"
         )
-    fixes.append("fewer evaluations (sample.n, the optimizer's budget) or more parallel.n_jobs")
+    fixes.append(
+        "fewer evaluations (sample.n, the optimizer's budget"
+        + (", optimizer.reference=false" if reference else "")
+        + ") or more parallel.n_jobs"
+    )
     default = "" if c.evaluate.resolution is not None else f" (the default of {c.mechanism.name}, method {method})"
     raise ConfigError(
         f"evaluate.max_hours={c.evaluate.max_hours:g} is invalid: the run at evaluate.resolution={res}{default} "
-        f"is estimated at {hours:.3g} h ({evaluations} evaluations of {float(res) ** n_axes:.3g} nodes "
-        f"at {NODES_PER_SECOND / METHOD_COST[method]:.0e} nodes/s/worker x parallel.n_jobs={c.parallel.n_jobs}); "
+        f"is estimated at {hours:.3g} h ({evaluations} evaluations of {float(res) ** n_axes:.3g} nodes"
+        + (f", {reference} of them the reference optimum's," if reference else "")
+        + f" at {NODES_PER_SECOND / METHOD_COST[method]:.0e} nodes/s/worker x parallel.n_jobs={c.parallel.n_jobs}); "
         f"allowed: {', or '.join(fixes)}"
     )
+
+
+def _largest_resolution(estimate: float, fits: Callable[[int], bool]) -> int:
+    """The largest resolution >= 0 that ``fits``, from the root ``estimate`` of its bound (floating
+    point may put a root just below its integer: ``8000 ** (1 / 3)`` is 19.999...)."""
+    top = int(estimate) + 1
+    while top > 0 and not fits(top):
+        top -= 1
+    return top
 
 
 def _round_up(hours: float) -> float:

@@ -70,6 +70,26 @@ class BestKnown:
         return f"{self.found_by} (best of {len(self.searches)} searches; {self.agreeing} agree within 0.1 %)"
 
 
+def expected_evaluations(
+    n_var: int,
+    *,
+    seeds: tuple[int, ...] = REFERENCE_SEEDS,
+    de: tuple[int, int] | None = REFERENCE_DE,
+    grid_points: int = REFERENCE_GRID_POINTS,
+    max_grid: int = REFERENCE_MAX_GRID,
+    grid_polish: int = 3,
+    polish_evaluations: int = REFERENCE_POLISH,
+) -> int:
+    """Evaluations :func:`best_known` spends at most on a problem of ``n_var`` design variables,
+    with the same keyword arguments (each search's budget and each polish's)."""
+    total = len(seeds) * (CMAES(CMAESConfig()).expected_evaluations() + polish_evaluations)
+    if de is not None:
+        total += DE(DEConfig(population=de[0], generations=de[1])).expected_evaluations() + polish_evaluations
+    if grid_points**n_var <= max_grid:
+        total += grid_points**n_var + grid_polish * polish_evaluations
+    return int(total)
+
+
 def best_known(
     problem: Problem,
     *,

@@ -22,9 +22,10 @@ Steps (each optional part set in the optimiser's config):
 Error bars (issue 23): the estimated discretisation error of an optimum's
 objective is its change at ``refine_factor`` times the resolution
 (``objective_error``, ``reference_error``); the gap's error is the sum of the
-two, relative to the reference (``reference_gap_error``), and a gap below it
+two, relative to the reference (``reference_gap_error``), and a gap whose size is below it
 is "within error" (``reference_gap_within_error``, ``reference_gap_label``),
-never a precise percentage.
+never a precise percentage; a run better than the reference by more than the
+error is labelled as beating it.
 
 Designs met twice within a run are evaluated once (an in-run memo).
 """
@@ -217,30 +218,39 @@ def reference_stage(
 
 
 def within_error(gap: float, gap_error: float) -> bool:
-    """Whether a relative gap to the reference is no larger than its error (both fractions)."""
-    return bool(gap <= gap_error)
+    """Whether a relative gap to the reference is no larger than its error in size (both fractions;
+    a negative gap: the run is better than the reference)."""
+    return bool(abs(gap) <= gap_error)
 
 
 def gap_label(gap: float, gap_error: float) -> str:
     """A relative gap to the reference as reported everywhere (best.parquet, log, figures, report):
-    "within error (< e %)" where :func:`within_error` (its percentage is not quoted), else
+    "within error (< e %)" where :func:`within_error` (its percentage is not quoted), "beats the
+    reference by g % ± e %" for a run better than the reference by more than the error, else
     "g % ± e %". ``gap``, ``gap_error``: fractions of the reference's value."""
     if within_error(gap, gap_error):
         return f"within error (< {100 * gap_error:.2g} %)"
-    return f"{100 * gap:.3g} % ± {100 * gap_error:.2g} %"
+    spread = f"{100 * abs(gap):.3g} % ± {100 * gap_error:.2g} %"
+    return f"beats the reference by {spread}" if gap < 0 else spread
 
 
 def group_gap_label(runs: pd.DataFrame) -> str:
     """:func:`gap_label` of several runs of one study (seeds): their mean gap against their largest
-    gap error, "" where no run has a reference. ``runs``: rows of ``best`` with the columns
-    ``reference_gap`` and ``reference_gap_error`` (fractions)."""
+    gap error, or, where some runs trail the reference and others beat it (each by more than the
+    error: a mean would cancel them), the range of their gaps; "" where no run has a reference.
+    ``runs``: rows of ``best`` with the columns ``reference_gap`` and ``reference_gap_error``
+    (fractions)."""
     if "reference_gap_error" not in runs:
         return ""
     rows = runs[["reference_gap", "reference_gap_error"]].dropna()
     if rows.empty:
         return ""
-    label = gap_label(float(rows["reference_gap"].mean()), float(rows["reference_gap_error"].max()))
-    return label if len(rows) == 1 else f"{label} (mean of {len(rows)})"
+    gaps, gap_error = rows["reference_gap"], float(rows["reference_gap_error"].max())
+    if len(rows) == 1:
+        return gap_label(float(gaps.iloc[0]), gap_error)
+    if gaps.min() < -gap_error and gaps.max() > gap_error:
+        return f"{100 * gaps.min():.3g} % to {100 * gaps.max():.3g} % ± {100 * gap_error:.2g} % ({len(rows)} runs)"
+    return f"{gap_label(float(gaps.mean()), gap_error)} (mean of {len(rows)})"
 
 
 def reference_columns(best: dict, reference: dict | None, names: list[str]) -> dict:

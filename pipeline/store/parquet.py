@@ -121,10 +121,14 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "reference_gap_error": ("1", "(objective_error + reference_error) / reference_value: the error of reference_gap"),
     "reference_gap_within_error": (
         "",
-        "reference_gap <= reference_gap_error: the gap is not resolved by the "
+        "|reference_gap| <= reference_gap_error: the gap is not resolved by the "
         "objective's accuracy; false if no reference was run",
     ),
-    "reference_gap_label": ("", "the gap as reported: 'within error (< e %)' or 'g % ± e %'"),
+    "reference_gap_label": (
+        "",
+        "the gap as reported: 'within error (< e %)', 'g % ± e %' or, for a run better than the reference "
+        "by more than the error, 'beats the reference by g % ± e %'",
+    ),
     "reference_found_by": ("", "the search that found the reference optimum and how many searches agree"),
     "reference_evaluations": ("", "objective evaluations of the reference searches (not in n_evaluations)"),
     VARIABLE + "_reference": (
