@@ -93,12 +93,30 @@ def periodic_cos_sin(angles):
     period = 1
     while period < min(count, 4096) and angles[period] != angles[0]:
         period += 1
-    for p in range(count):
-        angle = angles[p]
-        if p >= period and angles[p - period] == angle:
-            cos_a[p], sin_a[p] = cos_a[p - period], sin_a[p - period]
-        else:
-            cos_a[p], sin_a[p] = math.cos(angle), math.sin(angle)
+    if period == 1 or period >= count:  # runs of one angle (a slow axis), or no repetition
+        for p in range(count):
+            angle = angles[p]
+            if p >= period and angles[p - period] == angle:
+                cos_a[p], sin_a[p] = cos_a[p - period], sin_a[p - period]
+            else:
+                cos_a[p], sin_a[p] = math.cos(angle), math.sin(angle)
+        return cos_a, sin_a
+    # a fast axis: the same choice per pose, as runs of poses that repeat the period before,
+    # each copied in a loop of its own (the loop above, with its test per pose, stalls on the
+    # value stored one period back: ~5x slower for a grid's angle column)
+    for p in range(period):
+        cos_a[p], sin_a[p] = math.cos(angles[p]), math.sin(angles[p])
+    p = period
+    while p < count:
+        q = p
+        while q < count and angles[q - period] == angles[q]:
+            q += 1
+        for r in range(p, q):
+            cos_a[r] = cos_a[r - period]
+            sin_a[r] = sin_a[r - period]
+        if q < count:
+            cos_a[q], sin_a[q] = math.cos(angles[q]), math.sin(angles[q])
+        p = q + 1
     return cos_a, sin_a
 
 

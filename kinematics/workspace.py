@@ -488,7 +488,7 @@ def _crossings(
         first = linear(np.ascontiguousarray(reach), dex_in, dex_out)
         look = np.nonzero(np.isfinite(first))[0]
         t1 = first[look]
-        at = probe[look].copy()
+        at = probe[look]  # a copy (fancy indexing)
         at[np.arange(look.size), column[look]] = p_in[look] + t1 * (p_out[look] - p_in[look])
         if start.shape[0]:
             inside_1, weight_1, ic_1, _ = values(at)
@@ -499,11 +499,11 @@ def _crossings(
         t2, which = refined(reach, np.ascontiguousarray(reach_1), dex_in, dex_1, dex_out, look, t1)
         t[look] = t2
         if start.shape[0]:
-            reachable_1 = np.isfinite(ic_1)
-            dexterous_first = reachable_1 & (which == reach.shape[1])
-            ic_there = np.where(dexterous_first, limit, np.nan_to_num(ic_1))
-            at_value = np.array(_integrands(reachable_1, weight_1, ic_there, start.shape[0]))
-            value[:, look[reachable_1]] = at_value[:, reachable_1]
+            # the integrands at the reachable points t1 only (the others keep the inside end's)
+            reachable_1 = np.nonzero(np.isfinite(ic_1))[0]
+            ic_there = np.where(which[reachable_1] == reach.shape[1], limit, ic_1[reachable_1])
+            every = np.ones(reachable_1.size, dtype=bool)
+            value[:, look[reachable_1]] = _integrands(every, weight_1[reachable_1], ic_there, start.shape[0])
     crossing = p_in + t * (p_out - p_in)
     left = np.nonzero(np.isnan(t))[0]
     if left.size and steps is not None:
@@ -842,9 +842,15 @@ def _edge_crossings(
 
 
 def _integrands(inside: np.ndarray, weight: np.ndarray, ic: np.ndarray, count: int = 2) -> tuple[np.ndarray, ...]:
-    """The integrands of V and of V * GDI at poses: ``weight`` and ``weight / kappa``, 0 outside."""
+    """The integrands of V and of V * GDI at poses: ``weight`` and ``weight / kappa``, 0 outside
+    (the first ``count``)."""
     f0 = np.where(inside, weight, 0.0)
-    return (f0, np.where(inside, weight * np.nan_to_num(ic), 0.0))[:count]
+    if count < 2:
+        return (f0,)[:count]
+    # 1/kappa only where inside (a fraction of a grid's nodes), and a NaN of an outside pose ignored
+    f1 = np.zeros(np.shape(inside))
+    f1[inside] = weight[inside] * np.nan_to_num(ic[inside])
+    return f0, f1
 
 
 def _node_poses(axes: list[np.ndarray], index: list[np.ndarray]) -> np.ndarray:
@@ -1435,8 +1441,7 @@ def _integrate_grid(
     inside, weight, ic = (np.concatenate(k) for k in zip(*parts))
     vals = ic[inside]
     n_inside = int(inside.sum())
-    f0 = np.where(inside, weight, 0.0)
-    f1 = np.where(inside, weight * np.nan_to_num(ic), 0.0)
+    f0, f1 = _integrands(inside, weight, ic)
     if sampled:
         weight_sum, ic_sum = _boundary_corrected_sums(
             values,
