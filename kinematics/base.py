@@ -267,6 +267,10 @@ class Mechanism(ABC):
     #: the node budget of ``method="grid"`` (None: :attr:`default_nodes`), chosen per mechanism
     #: from the error-cost curve of docs/accuracy.md (its cells near the boundary cost more)
     grid_nodes: ClassVar[int | None] = None
+    #: nodes of ``method="grid"`` along a pose variable, as a multiple of ``resolution``, where
+    #: not 1 (rounded up): an axis along which the workspace's margins and ``1/kappa`` vary
+    #: slowly needs fewer (H4: theta, docs/accuracy.md)
+    grid_axis_nodes: ClassVar[dict[str, float]] = {}
     #: coarsest resolution whose volume and GDI stay within about 3 % of a fine
     #: grid (measured in ``tests/test_workspace.py``); the pipeline refuses coarser
     min_resolution: ClassVar[int] = 8

@@ -34,8 +34,8 @@ in closed form; the integrand of a cut cell is taken at that centroid. Exact
 for a planar boundary and second order for a smooth one, and continuous in the
 design (no step when the boundary crosses a node); it costs more than the plain
 count at each mechanism's default (the ratios: docs/accuracy.md). Its default resolution
-is the mechanism's ``grid_nodes`` budget where set (H4 28^3, Tricept 28^3,
-Delta 26^3), else ``default_nodes``. ``method="midpoint"``: the plain
+is the mechanism's ``grid_nodes`` budget where set (H4 30 x 30 x 15, half the nodes
+along theta: ``grid_axis_nodes``; Tricept 28^3, Delta 26^3), else ``default_nodes``. ``method="midpoint"``: the plain
 cell-centre count on a regular grid of ``default_nodes`` (first order; it moves
 in steps as the boundary crosses cell centres), the objective of earlier
 versions, kept for comparison. Where a mechanism has an axis along which nothing
@@ -214,6 +214,7 @@ def _grid_axes(
     offset: float = 0.5,
     exact_axis: int | None = None,
     bounds: tuple[np.ndarray, np.ndarray] | None = None,
+    anisotropic: bool = False,
 ) -> tuple[list[np.ndarray], float]:
     """Grid nodes per pose variable, and the cell measure.
 
@@ -221,7 +222,8 @@ def _grid_axes(
     interleaved grid of the same resolution (used for the error estimate).
     ``exact_axis`` is integrated analytically: it gets one placeholder node
     and does not enter the cell measure. ``bounds``: the mechanism's
-    ``pose_bounds(orientation)`` when the caller has them already.
+    ``pose_bounds(orientation)`` when the caller has them already. ``anisotropic``: the nodes
+    per sampled axis of :func:`_axis_nodes` (``method="grid"``), else ``resolution`` on each.
     """
     lo, hi = mechanism.pose_bounds(orientation) if bounds is None else bounds
     axes: list[np.ndarray] = []
@@ -229,8 +231,9 @@ def _grid_axes(
     for j in range(mechanism.dof):
         if j in _sampled_indices(mechanism, orientation, fixed, exact_axis):
             width = max(float(hi[j] - lo[j]), 0.0)
-            step = width / resolution
-            axes.append(lo[j] + step * (np.arange(resolution) + offset))
+            count = _axis_nodes(mechanism, j, resolution) if anisotropic else resolution
+            step = width / count
+            axes.append(lo[j] + step * (np.arange(count) + offset))
             cell *= step
         elif mechanism.pose_names[j] in fixed:
             axes.append(np.array([float(fixed[mechanism.pose_names[j]])]))
@@ -239,6 +242,31 @@ def _grid_axes(
         else:  # the exact axis
             axes.append(np.array([0.5 * (lo[j] + hi[j])]))
     return axes, cell
+
+
+def _axis_nodes(mechanism: Mechanism, j: int, resolution: int) -> int:
+    """Nodes of ``method="grid"`` along pose variable ``j`` at ``resolution``: ``resolution``
+    times the mechanism's :attr:`~kinematics.base.Mechanism.grid_axis_nodes` factor, rounded up."""
+    factor = mechanism.grid_axis_nodes.get(mechanism.pose_names[j], 1.0)
+    return max(int(math.ceil(factor * resolution - 1e-9)), 1)
+
+
+def grid_nodes(
+    mechanism: Mechanism,
+    resolution: int,
+    orientation: tuple[float, float] | None = None,
+    fixed: dict[str, float] | None = None,
+    method: str = "grid",
+) -> int:
+    """Nodes of one evaluation's grid at ``resolution`` (the product over the sampled axes;
+    ``method="grid"`` with the mechanism's per-axis factors, its coarse pass not counted)."""
+    if orientation is None:
+        orientation = mechanism.default_orientation
+    fixed = fixed or {}
+    sampled = _sampled_indices(mechanism, orientation, fixed, _exact_axis(mechanism, fixed))
+    if method != "grid":
+        return int(resolution) ** len(sampled)
+    return math.prod(_axis_nodes(mechanism, j, resolution) for j in sampled)
 
 
 def _sampled_indices(
@@ -324,8 +352,10 @@ def default_resolution(
     n_axes = max(len(sampled_axes(mechanism, orientation, fixed)), 1)
     budget = mechanism.grid_nodes if method == "grid" else None
     nodes = int(mechanism.default_nodes if budget is None else budget)
-    res = int(round(nodes ** (1.0 / n_axes)))
-    while res > 1 and res**n_axes > nodes:
+    # from above: the per-axis factors' product taken out of the budget, then down to the largest fit
+    shrink = grid_nodes(mechanism, 1000, orientation, fixed, method) / 1000.0**n_axes
+    res = int(math.ceil((nodes / shrink) ** (1.0 / n_axes))) + 1
+    while res > 1 and grid_nodes(mechanism, res, orientation, fixed, method) > nodes:
         res -= 1
     return res
 
@@ -452,8 +482,9 @@ def _crossings(
        where the three values change sign, the first of the margins' roots the crossing.
        Third order in the edge length for smooth margins, and continuous in the design.
     3. The integrands at the crossing are those at ``t1`` (``1/kappa`` at the limit where the
-       dexterity margin is the first), or those of the inside end where ``t1`` is
-       unreachable.
+       dexterity margin is the first); where ``t1`` is unreachable, those at the crossing
+       found in step 2 (a second look), and those of the inside end where that is
+       unreachable too.
 
     Rows the margins cannot place (the mechanism has none, one is undefined at an end, or
     none changes sign) are bisected ``steps`` times by the membership test instead
@@ -499,7 +530,17 @@ def _crossings(
         t2, which = refined(reach, np.ascontiguousarray(reach_1), dex_in, dex_1, dex_out, look, t1)
         t[look] = t2
         if start.shape[0]:
-            # the integrands at the reachable points t1 only (the others keep the inside end's)
+            # where t1 is unreachable, a second look at the crossing itself: the inside end's
+            # integrands, the fallback, lie a cell away from it and differed from the value at
+            # a reachable t1 by a step (the crossing's value at H4's optimum: 1/kappa 0.15 for 0.01)
+            again = np.nonzero(~np.isfinite(ic_1) & (which >= 0))[0]
+            if again.size:
+                at_2 = at[again]
+                at_2[np.arange(again.size), column[look[again]]] = p_in[look[again]] + t2[again] * (
+                    p_out[look[again]] - p_in[look[again]]
+                )
+                _, weight_1[again], ic_1[again], _ = values(at_2)
+            # the integrands at the reachable points only (the others keep the inside end's)
             reachable_1 = np.nonzero(np.isfinite(ic_1))[0]
             ic_there = np.where(which[reachable_1] == reach.shape[1], limit, ic_1[reachable_1])
             every = np.ones(reachable_1.size, dtype=bool)
@@ -955,38 +996,47 @@ def _boundary_corrected_sums(
             is_in[:, None], centroid, np.where((own < 1.0)[:, None], -centroid * (own / (1.0 - own))[:, None], 0.0)
         )
     fraction = np.where(is_in, own, 1.0 - own)
-    # f at the centroid, linear along the axis of the nearest crossing: from the node and the
-    # node behind it (inside node), or from the crossing and the inside node beyond it
-    rows = np.arange(boundary.size)
-    k_near = np.argmax(slopes, axis=1)
-    along = centroid[rows, k_near]  # cell units, positive towards the crossing
-    at_crossing = 1.0 / slopes[rows, k_near]
+    # f at the centroid (cell units, positive towards each axis's crossing; see _cut_cell_value)
     index = np.unravel_index(boundary, inside.shape)
-    axis_of = np.asarray(sampled)[k_near]
     dims = np.asarray(inside.shape)
-    beyond, behind = [], []
-    for j in range(inside.ndim):
-        offset = np.where(axis_of == j, sign[rows, k_near], 0.0).astype(int)
-        beyond.append(np.clip(index[j] + offset, 0, dims[j] - 1))
-        behind.append(np.clip(index[j] - offset, 0, dims[j] - 1))
-    beyond, behind = tuple(beyond), tuple(behind)
-    has_behind = inside[behind] & np.any([(behind[j] != index[j]) for j in range(inside.ndim)], axis=0)
+    neighbours = []  # per sampled axis: the node beyond (towards the crossing), behind, and its use
+    for k, j in enumerate(sampled):
+        offset = np.where(slopes[:, k] > 0.0, sign[:, k], 0.0).astype(int)
+        beyond = tuple(np.clip(index[i] + (offset if i == j else 0), 0, dims[i] - 1) for i in range(inside.ndim))
+        behind = tuple(np.clip(index[i] - (offset if i == j else 0), 0, dims[i] - 1) for i in range(inside.ndim))
+        neighbours.append((beyond, behind, (slopes[:, k] > 0.0) & inside[behind] & (behind[j] != index[j])))
+    weights = _crossing_weights(slopes)
     flat = np.ravel_multi_index(index, inside.shape)
     totals = []
     for m, f in enumerate((f0, f1)):
         node = f.ravel()[flat]
-        cross = crossing_values[:, m].reshape(n_sampled, -1)[k_near, boundary]
-        # inside node: extrapolate from the node and the one behind it (away from the crossing)
-        inner = node + np.where(has_behind, along * (node - f[behind]), 0.0)
-        # outside node: between the crossing (at 1/slope) and the inside node beyond it (at 1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = np.clip((along - at_crossing) / (1.0 - at_crossing), 0.0, 1.0)
-        t = np.where(at_crossing < 1.0, t, 0.0)
-        outer = cross + t * (f[beyond] - cross)
+        inner, outer = node.copy(), np.zeros(boundary.size)
+        for k, (beyond, behind, has_behind) in enumerate(neighbours):
+            along = centroid[:, k]
+            inner += weights[:, k] * np.where(has_behind, along * (node - f[behind]), 0.0)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                at_crossing = 1.0 / slopes[:, k]
+                t = np.clip((along - at_crossing) / (1.0 - at_crossing), 0.0, 1.0)
+            t = np.where(at_crossing < 1.0, t, 0.0)
+            cross = crossing_values[k, m].ravel()[boundary]
+            outer += weights[:, k] * np.where(weights[:, k] > 0.0, cross + t * (f[beyond] - cross), 0.0)
         value = np.maximum(np.where(is_in, inner, outer), 0.0)
         # the boundary nodes' own values (in the plain sums) replaced by their cells' parts
         totals.append(float(fraction @ value) - float(node.sum()))
     return weight_sum + totals[0], ic_sum + totals[1]
+
+
+def _crossing_weights(slopes: np.ndarray) -> np.ndarray:
+    """Weights (B, d) of each sampled axis's crossing in the integrand of a cut cell
+    (:func:`_cut_cell_value`), from the slopes (B, d) of :func:`_cube_fraction`: ``(slope - 1)^4``
+    normalised, 0 for a crossing at the far node or none; the nearest crossing alone where no
+    axis has weight (the cell is then not cut: its fraction is 0 or 1)."""
+    above = np.where(slopes > 1.0, (slopes - 1.0) * (slopes - 1.0), 0.0)
+    weights = above * above
+    total = weights.sum(axis=1)
+    none = np.nonzero(total == 0.0)[0]
+    weights[none, np.argmax(slopes[none], axis=1)] = 1.0
+    return weights / np.where(total == 0.0, 1.0, total)[:, None]
 
 
 @kernels.inline_jit
@@ -1040,39 +1090,77 @@ def _plane_cut(c, fraction_centroid, active, moment):
 
 
 @kernels.inline_jit
+def _fourth(x):
+    """``x**4`` as the numpy path computes it (:func:`_crossing_weights`)."""
+    square = x * x
+    return square * square
+
+
+@kernels.inline_jit
+def _crossing_weight(c, k, near, total):
+    """:func:`_crossing_weights` of axis ``k`` of one cell: slopes ``c`` (d,), ``near`` the axis of
+    the largest, ``total`` the sum of ``(c - 1)^4`` over the slopes above 1."""
+    if total > 0.0:
+        return _fourth(c[k] - 1.0) / total if c[k] > 1.0 else 0.0
+    return 1.0 if k == near else 0.0
+
+
+@kernels.inline_jit
 def _cut_cell_value(inside, f0, f1, p, c, near, toward, crossing_values, strides, sizes, cut, active, moment):
     """The cut cell of node ``p`` (flat index): its inside fraction times the integrands at the
     centroid of its inside part, ``(fraction f0, fraction f1)`` (:func:`_boundary_corrected_sums`
     for one node). ``c`` (d,) the slopes ``h / distance`` of its nearest crossing per sampled
     axis (0: none), ``near`` the axis of the largest, ``toward`` (d,) their directions (+-1) and
-    ``crossing_values`` (d, 2) the integrands there; ``cut``, ``active``, ``moment`` scratch."""
+    ``crossing_values`` (d, 2) the integrands there; ``cut``, ``active``, ``moment`` scratch.
+
+    The integrands at the centroid, linear along each axis with a crossing: for an inside node
+    from the node and the node behind it (away from the crossing), at the centroid's offset
+    along that axis; for an outside node between the crossing and the inside node beyond it.
+    The axes are weighted by ``(c - 1)^4`` (:func:`_crossing_weights`): mostly the nearest
+    crossing's. Why weights: the nearest crossing's axis alone switched axes where two crossings
+    were about as near, a step in the cell's integrand (2e-5 of eta at H4's optimum); the
+    weights move continuously, and a crossing that comes onto an edge at its far node enters
+    with weight 0. Why not the full linear model (every axis at weight 1): it was continuous too
+    but less accurate, GDI 0.12-0.13 % against 0.08-0.09 % on H4's and the Delta's designs of
+    docs/accuracy.md (a one-sided difference along a far crossing's axis is a poor slope)."""
+    d = c.shape[0]
     _plane_cut(c, cut, active, moment)
     own = cut[0]
-    along = cut[near + 1]
+    total = 0.0
+    for k in range(d):
+        if c[k] > 1.0:
+            total += _fourth(c[k] - 1.0)
     if inside[p]:
-        fraction = own
-    else:
-        fraction = 1.0 - own
-        along = -along * own / (1.0 - own) if own < 1.0 else 0.0
-    sign = int(toward[near])
-    stride = strides[near]
-    if inside[p]:
-        behind = (p // stride) % sizes[near] - sign
         v0, v1 = f0[p], f1[p]
-        if 0 <= behind < sizes[near] and inside[p - sign * stride]:
-            q = p - sign * stride
-            v0 += along * (f0[p] - f0[q])
-            v1 += along * (f1[p] - f1[q])
-    else:
-        q = p + sign * stride
-        at_crossing = 1.0 / c[near]
+        for k in range(d):
+            weight = _crossing_weight(c, k, near, total)
+            if weight <= 0.0:
+                continue
+            sign = int(toward[k])
+            behind = (p // strides[k]) % sizes[k] - sign
+            if 0 <= behind < sizes[k] and inside[p - sign * strides[k]]:
+                q = p - sign * strides[k]
+                v0 += weight * (cut[k + 1] * (f0[p] - f0[q]))
+                v1 += weight * (cut[k + 1] * (f1[p] - f1[q]))
+        return own * max(v0, 0.0), own * max(v1, 0.0)
+    # the inside part's centroid: the rest of the cell, whose centroid is the node
+    scale = -own / (1.0 - own) if own < 1.0 else 0.0
+    v0 = 0.0
+    v1 = 0.0
+    for k in range(d):
+        weight = _crossing_weight(c, k, near, total)
+        if weight <= 0.0:
+            continue
+        along = cut[k + 1] * scale
+        q = p + int(toward[k]) * strides[k]
+        at_crossing = 1.0 / c[k]
         t = 0.0
         if at_crossing < 1.0:
             t = min(max((along - at_crossing) / (1.0 - at_crossing), 0.0), 1.0)
-        x0, x1 = crossing_values[near, 0], crossing_values[near, 1]
-        v0 = x0 + t * (f0[q] - x0)
-        v1 = x1 + t * (f1[q] - x1)
-    return fraction * max(v0, 0.0), fraction * max(v1, 0.0)
+        x0, x1 = crossing_values[k, 0], crossing_values[k, 1]
+        v0 += weight * (x0 + t * (f0[q] - x0))
+        v1 += weight * (x1 + t * (f1[q] - x1))
+    return (1.0 - own) * max(v0, 0.0), (1.0 - own) * max(v1, 0.0)
 
 
 @kernels.vector_jit
@@ -1340,7 +1428,7 @@ def _occupied_box(
     coarse cell at a time. An empty coarse grid keeps the box.
     """
     coarse = max(int(resolution / COARSE ** (3 / len(sampled))), 4)
-    axes, _ = _grid_axes(mechanism, coarse, orientation, fixed, 0.5, exact, box)
+    axes, _ = _grid_axes(mechanism, coarse, orientation, fixed, 0.5, exact, box, anisotropic=True)
     shape = tuple(len(a) for a in axes)
     inside = np.concatenate([values(_grid_poses(axes, start, stop))[0] for start, stop in _chunk_bounds(axes)]).reshape(
         shape
@@ -1379,7 +1467,7 @@ def _occupied_box(
         start = 0
         for j, side, _, p_in, _ in jobs:
             stop = start + p_in.size
-            step = (float(box[1][j]) - float(box[0][j])) / coarse
+            step = (float(box[1][j]) - float(box[0][j])) / len(axes[j])
             if side == "lo":
                 lo[j] = max(float(box[0][j]), float(crossing[start:stop].min()) - step)
             else:
@@ -1420,7 +1508,7 @@ def _integrate_grid(
     values = _PointValues(mechanism, exact, box, orientation, min_ic, length)
     if sampled:
         box = _occupied_box(values, mechanism, resolution, orientation, fixed, exact, box, sampled)
-    axes, cell = _grid_axes(mechanism, resolution, orientation, fixed, offset, exact, box)
+    axes, cell = _grid_axes(mechanism, resolution, orientation, fixed, offset, exact, box, anisotropic=refine)
     shape = tuple(len(a) for a in axes)
     total = int(np.prod(shape))
     # the grid's angular nodes all lie in the orientation box (it spans the box): then the
@@ -1646,7 +1734,7 @@ def evaluate(
         Grid points per sampled axis (larger is finer; doubling it refines
         every axis). Default :func:`default_resolution`: for ``method="grid"`` the node budget
         :attr:`~kinematics.base.Mechanism.grid_nodes` spread over the sampled axes where set
-        (H4 28, Tricept 28, Delta 26), else :attr:`~kinematics.base.Mechanism.default_nodes`
+        (H4 30, with 15 along theta; Tricept 28, Delta 26), else :attr:`~kinematics.base.Mechanism.default_nodes`
         (H4 24, Tricept 32, 3-RPR 32 over (x, y, phi) or 181 at constant phi, 2-RPR 400), which
         ``method="midpoint"`` always takes.
     orientation : (float, float), optional

@@ -224,9 +224,13 @@ def test_the_node_budget_allows_the_resolution_that_fills_it_exactly(tmp_path, m
     monkeypatch.chdir(tmp_path)
     # 8000 = 20^3 nodes: 20 passes, though 8000 ** (1 / 3) is 19.999... in floating point
     budget = ["evaluate.max_nodes=8000", "evaluate.refine_factor=1", "+debug=fast"]
-    precheck_overrides([*budget, "evaluate.resolution=20"])
-    err = _refused([*budget, "evaluate.resolution=21"], capsys)
-    assert "allowed <= 20 for h4" in err, err
+    precheck_overrides([*budget, "mechanism=tricept", "evaluate.resolution=20"])
+    err = _refused([*budget, "mechanism=tricept", "evaluate.resolution=21"], capsys)
+    assert "allowed <= 20 for tricept" in err, err
+    # H4 takes half the nodes along theta: 24 x 24 x 12 = 6912 <= 8000 < 25 x 25 x 13
+    precheck_overrides([*budget, "evaluate.resolution=24"])
+    err = _refused([*budget, "evaluate.resolution=25"], capsys)
+    assert "allowed <= 24 for h4" in err, err
 
 
 def test_the_time_budget_counts_the_reference_optimum_s_evaluations(tmp_path, monkeypatch, capsys):
@@ -238,5 +242,8 @@ def test_the_time_budget_counts_the_reference_optimum_s_evaluations(tmp_path, mo
     with_reference = _refused([*bound, "optimizer.reference=true"], capsys)
     spent = int(alone.split("h (", 1)[1].split(" evaluations", 1)[0])
     reference = expected_evaluations(3)
-    assert f"h ({spent + reference} evaluations of 5.93e+04 nodes, {reference} of them the reference" in with_reference
+    nodes = 39 * 39 * 20  # h4's theta: half the nodes, rounded up
+    assert (
+        f"h ({spent + reference} evaluations of {nodes:.3g} nodes, {reference} of them the reference" in with_reference
+    )
     assert "optimizer.reference=false" in with_reference and "optimizer.reference=false" not in alone

@@ -262,3 +262,55 @@ def test_a_crossing_next_to_a_margin_that_is_zero_at_the_inside_end(compiled):
     ok = np.ones(1)  # a dexterity margin positive everywhere
     first, which = crossing(reach, np.array([[margin(0.25)]]), ok, ok, ok, np.array([0]), np.array([0.25]))
     assert first[0] == pytest.approx(0.5, abs=1e-15) and which[0] == 0
+
+
+@pytest.mark.parametrize("name", sorted(PAPER_DESIGNS))
+def test_grid_nodes_counts_what_an_evaluation_samples(name):
+    """The node count the pipeline's budgets use (grid_nodes) is the grid's, per-axis factors
+    included (H4: half the nodes along theta), and the default fills the mechanism's budget."""
+    from kinematics.workspace import default_resolution, grid_nodes
+
+    mech = get_mechanism(name, **PAPER_DESIGNS[name])
+    if name in ("rpr2", "rpr3"):  # exact sections: no grid under method "grid"
+        method = "midpoint"
+    else:
+        method = "grid"
+    res = default_resolution(mech, method=method)
+    ev = evaluate(mech, method=method, error_estimate=False)
+    assert ev.resolution == res and ev.n_samples == grid_nodes(mech, res, method=method)
+    budget = (mech.grid_nodes or mech.default_nodes) if method == "grid" else mech.default_nodes
+    assert grid_nodes(mech, res, method=method) <= budget < grid_nodes(mech, res + 1, method=method)
+    if name == "h4":
+        assert (res, ev.n_samples) == (30, 30 * 30 * 15)
+
+
+@pytest.mark.parametrize("centre_inside", [False, True])
+def test_a_cut_cell_s_integrand_is_continuous_where_two_crossings_are_as_near(centre_inside):
+    """A cut cell whose crossings along x and y are about as near: swapping which one is nearer
+    changes its value by no more than the distances do (taking the nearest crossing's axis alone
+    jumped between two different values)."""
+    from kinematics import workspace as ws
+
+    shape = (3, 3, 3)
+    strides = np.array([9, 3, 1], dtype=np.int64)
+    sizes = np.array(shape, dtype=np.int64)
+    inside = np.ones(27, dtype=bool)
+    p = 13  # the centre node
+    inside[p] = centre_inside
+    f0 = np.ones(27)
+    f1 = np.linspace(0.1, 0.9, 27)  # a different 1/kappa at every node
+    f1[p] = 0.5 if centre_inside else 0.0
+    crossing_values = np.array([[1.0, 0.2], [1.0, 0.7], [0.0, 0.0]])  # x and y crossings differ
+    toward = np.array([1.0, -1.0, 1.0])
+    scratch = np.empty(4), np.empty(3, dtype=np.int64), np.empty(3)
+
+    def value(dx, dy):
+        slopes = np.array([1.0 / dx, 1.0 / dy, 0.0])
+        near = int(np.argmax(slopes))
+        return np.array(
+            ws._cut_cell_value(inside, f0, f1, p, slopes, near, toward, crossing_values, strides, sizes, *scratch)
+        )
+
+    x_nearer, y_nearer = value(0.3, 0.3 + 1e-9), value(0.3 + 1e-9, 0.3)
+    assert np.abs(x_nearer - y_nearer).max() < 1e-6
+    assert np.abs(value(0.1, 0.3) - value(0.3, 0.1)).max() > 1e-3  # the two crossings do differ

@@ -75,7 +75,8 @@ class EvaluateConfig:
     cell-centre count (first order, it moves in steps as the boundary crosses
     a node), kept for comparison. Each method has its own default resolution
     (``grid``: the mechanism's ``grid_nodes`` budget where set).
-    ``resolution``: grid points per sampled axis (null: the mechanism's
+    ``resolution``: grid points per sampled axis (``method=grid``: times the mechanism's
+    ``grid_axis_nodes`` factor of an axis; null: the mechanism's
     default for the method). Below the mechanism's ``min_resolution`` the volume or GDI error
     exceeds about 3 %, so it is refused unless ``allow_coarse`` (tests, quick
     looks). ``max_nodes``: nodes of one evaluation, refined one included
@@ -84,7 +85,8 @@ class EvaluateConfig:
 
     #: workspace integration: grid (boundary fractions, second order) or midpoint (cell-centre count, first order)
     method: str = "grid"
-    #: grid points per sampled axis (null: the mechanism's default for the method)
+    #: grid points per sampled axis (method grid: times the mechanism's factor of an axis where it
+    #: has one, H4 1/2 along theta; null: the mechanism's default for the method)
     resolution: Optional[int] = None
     #: the optimum is re-evaluated at refine_factor × resolution, [1, 8]
     refine_factor: int = 4

@@ -101,7 +101,7 @@ def _missing_message(key: str) -> str:
 def _check_budget(c: Config) -> None:
     """Grid resolution between the mechanism's minimum and the node and time budgets (the
     default resolution and the cost per node are the integration method's)."""
-    from kinematics.workspace import default_resolution, sampled_axes
+    from kinematics.workspace import default_resolution, grid_nodes, sampled_axes
 
     mech = c.mechanism.build(c.mechanism.centre)
     orientation = c.mechanism.orientation_rad() or mech.default_orientation
@@ -115,11 +115,11 @@ def _check_budget(c: Config) -> None:
         )
     method = c.evaluate.method
     res = res or default_resolution(mech, orientation, None, method)
-    refined_nodes = float(res * c.evaluate.refine_factor) ** n_axes
+    refined_nodes = grid_nodes(mech, res * c.evaluate.refine_factor, orientation, None, method)
     if refined_nodes > c.evaluate.max_nodes:
         top = _largest_resolution(
             c.evaluate.max_nodes ** (1 / n_axes) / c.evaluate.refine_factor,
-            lambda r: (r * c.evaluate.refine_factor) ** n_axes <= c.evaluate.max_nodes,
+            lambda r: grid_nodes(mech, r * c.evaluate.refine_factor, orientation, None, method) <= c.evaluate.max_nodes,
         )
         raise ConfigError(
             f"evaluate.resolution={res} is invalid: allowed <= {top} for {c.mechanism.name} "
@@ -136,7 +136,7 @@ def _check_budget(c: Config) -> None:
     rate = NODES_PER_SECOND / METHOD_COST[method] * c.parallel.n_jobs
 
     def hours_at(resolution: int) -> float:
-        return evaluations * float(resolution) ** n_axes / rate / 3600
+        return evaluations * grid_nodes(mech, resolution, orientation, None, method) / rate / 3600
 
     hours = hours_at(res)
     if hours <= c.evaluate.max_hours:
@@ -164,7 +164,7 @@ def _check_budget(c: Config) -> None:
     default = "" if c.evaluate.resolution is not None else f" (the default of {c.mechanism.name}, method {method})"
     raise ConfigError(
         f"evaluate.max_hours={c.evaluate.max_hours:g} is invalid: the run at evaluate.resolution={res}{default} "
-        f"is estimated at {hours:.3g} h ({evaluations} evaluations of {float(res) ** n_axes:.3g} nodes"
+        f"is estimated at {hours:.3g} h ({evaluations} evaluations of {grid_nodes(mech, res, orientation, None, method):.3g} nodes"
         + (f", {reference} of them the reference optimum's," if reference else "")
         + f" at {NODES_PER_SECOND / METHOD_COST[method]:.0e} nodes/s/worker x parallel.n_jobs={c.parallel.n_jobs}); "
         f"allowed: {', or '.join(fixes)}"
@@ -172,9 +172,13 @@ def _check_budget(c: Config) -> None:
 
 
 def _largest_resolution(estimate: float, fits: Callable[[int], bool]) -> int:
-    """The largest resolution >= 0 that ``fits``, from the root ``estimate`` of its bound (floating
-    point may put a root just below its integer: ``8000 ** (1 / 3)`` is 19.999...)."""
-    top = int(estimate) + 1
+    """The largest resolution >= 0 that ``fits`` (a bound on nodes, which grow with it), searched
+    from ``estimate``, the root of the bound with ``resolution`` nodes on every axis: floating point
+    may put the root just below its integer (``8000 ** (1 / 3)`` is 19.999...), and an axis with
+    fewer nodes (``grid_axis_nodes``) allows more."""
+    top = max(int(estimate), 0)
+    while fits(top + 1):
+        top += 1
     while top > 0 and not fits(top):
         top -= 1
     return top
