@@ -39,6 +39,10 @@ def check_writable(field_name: str, path: str | os.PathLike) -> Path:
     anonymous temporary file (a permission check alone is not enough: root
     passes it on read-only or pseudo file systems).
     """
+    if not str(path).strip():
+        # Path("") is the working folder, but a path built on it ("${paths.output_dir}/cache")
+        # is the file system's root
+        raise ConfigError(f"{field_name}={str(path)!r} is invalid: it is empty; allowed: a writable directory")
     p = Path(path).expanduser()
     probe = p
     while not probe.exists() and not probe.is_symlink():
@@ -54,7 +58,7 @@ def check_writable(field_name: str, path: str | os.PathLike) -> Path:
             pass
     except OSError as exc:
         raise ConfigError(
-            f"{field_name}={str(path)!r} is invalid: {probe} is not writable "
+            f"{field_name}={str(path)!r} is invalid: no file can be created in {probe} "
             f"({exc.strerror or exc}); allowed: a writable directory"
         ) from None
     return p

@@ -222,15 +222,15 @@ def test_evaluate_s_parquet_has_the_dataset_s_integer_columns(tmp_path, capsys):
 
 def test_the_node_budget_allows_the_resolution_that_fills_it_exactly(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
-    # 8000 = 20^3 nodes: 20 passes, though 8000 ** (1 / 3) is 19.999... in floating point
-    budget = ["evaluate.max_nodes=8000", "evaluate.refine_factor=1", "+debug=fast"]
+    # 64000 = (20 x 2)^3 refined nodes: 20 passes, though 64000 ** (1 / 3) / 2 is 19.999... in floating point
+    budget = ["evaluate.max_nodes=64000", "evaluate.refine_factor=2", "+debug=fast"]
     precheck_overrides([*budget, "mechanism=tricept", "evaluate.resolution=20"])
     err = _refused([*budget, "mechanism=tricept", "evaluate.resolution=21"], capsys)
     assert "allowed <= 20 for tricept" in err, err
-    # H4 takes half the nodes along theta: 24 x 24 x 12 = 6912 <= 8000 < 25 x 25 x 13
-    precheck_overrides([*budget, "evaluate.resolution=24"])
-    err = _refused([*budget, "evaluate.resolution=25"], capsys)
-    assert "allowed <= 24 for h4" in err, err
+    # H4 takes half the nodes along theta: 50 x 50 x 25 = 62500 <= 64000 < 52 x 52 x 26 refined nodes
+    precheck_overrides([*budget, "evaluate.resolution=25"])
+    err = _refused([*budget, "evaluate.resolution=26"], capsys)
+    assert "allowed <= 25 for h4" in err, err
 
 
 def test_the_time_budget_counts_the_reference_optimum_s_evaluations(tmp_path, monkeypatch, capsys):
@@ -247,3 +247,16 @@ def test_the_time_budget_counts_the_reference_optimum_s_evaluations(tmp_path, mo
         f"h ({spent + reference} evaluations of {nodes:.3g} nodes, {reference} of them the reference" in with_reference
     )
     assert "optimizer.reference=false" in with_reference and "optimizer.reference=false" not in alone
+
+
+def test_the_time_budget_counts_the_workers_the_machine_has(tmp_path, monkeypatch, capsys):
+    """More parallel.n_jobs than cores run on the cores (pipeline.evaluation.pool.worker_count):
+    asking for more does not pass the time budget, and the message does not suggest it."""
+    from joblib import cpu_count
+
+    monkeypatch.chdir(tmp_path)
+    cores = max(1, int(cpu_count()))
+    bound = ["evaluate.resolution=39", "evaluate.max_hours=0.05"]
+    err = _refused([*bound, f"parallel.n_jobs={cores + 62}"], capsys)
+    assert f"x {cores} workers of parallel.n_jobs={cores + 62}" in err and "more parallel.n_jobs" not in err, err
+    assert _refused(bound, capsys).split(" h (", 1)[0] == err.split(" h (", 1)[0]  # the same estimate

@@ -77,6 +77,14 @@ def test_readme_sweep_and_read_returns_every_column_of_four_mechanisms(tmp_path)
     assert {"a", "q_min", "d_ratio"} <= set(designs.columns) and designs["n_samples"].dtype == "int64"
     field = pq.read_schema(next((out / "dataset" / "best").glob("*.parquet"))).field("gdi")
     assert field.metadata[b"unit"] == b"1"
+    # a unit that names a column ("volume_unit": the row's own unit) names one of the same table
+    for table in ("best", "history", "designs"):
+        schema = pq.read_schema(next((out / "dataset" / table).rglob("*.parquet")))
+        for name in schema.names:
+            unit = ((schema.field(name).metadata or {}).get(b"unit") or b"").decode()
+            if unit.endswith("_unit"):
+                assert unit in schema.names, (table, name, unit)
+    assert set(designs.groupby("mechanism")["volume_unit"].first()) == {"cm³·rad", "mm·rad²", "mm²·rad", "mm²"}
 
 
 def test_aggregating_again_by_any_path_changes_nothing(tmp_path):

@@ -94,6 +94,7 @@ SINGLE_RUN_REFUSALS = [
     ("resolution over the time budget", ["evaluate.resolution=39", "evaluate.max_hours=0.01"], "evaluate.resolution"),
     ("rpr2 resolution below its minimum", ["mechanism=rpr2", "evaluate.resolution=20"], "evaluate.resolution"),
     ("refine factor 0", ["evaluate.refine_factor=0"], "evaluate.refine_factor"),
+    ("refine factor 1 (an error bar of 0)", ["evaluate.refine_factor=1"], "evaluate.refine_factor"),
     ("unknown integration method", ["evaluate.method=foo"], "evaluate.method"),
     ("polar is no method of a run", ["evaluate.method=polar"], "evaluate.method"),
     ("max hours 0", ["evaluate.max_hours=0"], "evaluate.max_hours"),
@@ -120,6 +121,12 @@ SINGLE_RUN_REFUSALS = [
     ("plot dpi 10", ["plot.dpi=10"], "plot.dpi"),
     ("plot format gif", ["plot.format=gif"], "plot.format"),
     ("output dir unwritable", ["paths.output_dir=/sys/pm-design-test"], "paths.output_dir"),
+    ("output dir empty (the cache would go to /cache)", ["paths.output_dir="], "paths.output_dir"),
+    (
+        "orientation of a mechanism without angles",
+        ["mechanism=rpr2", "mechanism.orientation=[-10,10]"],
+        "mechanism.orientation",
+    ),
     ("run dir unwritable", ["hydra.run.dir=/sys/pm-design-run"], "hydra.run.dir"),
 ]
 

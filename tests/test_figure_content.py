@@ -318,3 +318,67 @@ def test_groups_of_runs_keep_experiments_apart(saved):
     assert legend == ["ga / h4_mixed, w_d=0.5 (1 seed)", "ga / h4_own, w_d=0.5 (1 seed)"]
     table = seeds_table(best)
     assert table.count("<tr><td>h4</td>") == 2 and "<td>h4_own</td>" in table
+
+
+def test_report_convergence_panels_take_their_own_units(saved):
+    """One objective has a unit per mechanism: the volume of an H4 in cm³·rad, of a Tricept in
+    mm·rad²; each panel's y axis is labelled with its own (the Tricept's read cm³·rad)."""
+    from pipeline.report.figures import convergence_figure
+
+    best = pd.DataFrame(
+        {
+            "run_id": ["a", "b"],
+            "mechanism": ["h4", "tricept"],
+            "objective": ["volume"] * 2,
+            "objective_unit": ["cm³·rad", "mm·rad²"],
+            "w_d": [0.0] * 2,
+            "optimizer": ["cmaes"] * 2,
+            "seed": [0] * 2,
+        }
+    )
+    history = pd.DataFrame({"run_id": ["a", "a", "b", "b"], "generation": [0, 1] * 2, "best": [1.0, 2.0, 3.0, 4.0]})
+    convergence_figure(best, history)
+    (fig,) = saved
+    check_figure(fig)
+    panels = {ax.get_title().split(":")[0]: ax.get_ylabel() for ax in fig.axes if ax.axison}
+    assert panels == {"h4": "V [cm³·rad]", "tricept": "V [mm·rad²]"}
+
+
+def test_report_gallery_names_each_panel_s_own_slice(saved):
+    """Each Tricept design is cut at its own median c: each panel names its own slice (every
+    panel was titled with the first design's), and the figure's title names no single one."""
+    import dataclasses
+
+    from pipeline.report.figures import workspace_gallery
+    from pipeline.stages.slices import workspace_slice
+
+    config = MechanismConfig(name="tricept")
+    designs = {"a": [0.9 * c for c in config.centre], "b": [1.1 * c for c in config.centre]}
+    labels = {
+        run_id: workspace_slice(config.build(x), config.build(x).default_orientation, 0.01, None).fixed_label
+        for run_id, x in designs.items()
+    }
+    assert labels["a"] != labels["b"]
+    rows = pd.DataFrame(
+        [
+            {"run_id": run_id, "mechanism": "tricept", "objective": "volume", "w_d": 0.0, "optimizer": "cmaes"}
+            | {"seed": seed, "objective_value": 1.0 - seed}
+            | dict(zip(config.design.names, x))
+            for seed, (run_id, x) in enumerate(designs.items())
+        ]
+    )
+    configs = {run_id: {"mechanism": dataclasses.asdict(config)} for run_id in designs}
+    for kind in ("workspace", "inverse_condition"):
+        workspace_gallery(rows, configs, kind)
+        fig = saved[-1]
+        check_figure(fig)
+        assert_titles_fit(fig)  # a third line in each title
+        titles = [ax.get_title().replace("\n", " ") for ax in fig.axes if ax.axison and ax.get_title()]
+        assert len(titles) == 2
+        for title, run_id in zip(titles, designs):
+            assert f"slice {labels[run_id]}" in title, (title, labels[run_id])
+        assert not any(label in fig._suptitle.get_text() for label in labels.values())
+    # one common slice is named once, in the figure's title
+    workspace_gallery(rows.iloc[:1], configs, "workspace")
+    assert f"slice {labels['a']}" in saved[-1]._suptitle.get_text()
+    assert "slice" not in saved[-1].axes[0].get_title()

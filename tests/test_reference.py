@@ -158,7 +158,7 @@ def test_a_run_better_than_the_reference_says_so():
     assert better["reference_gap_label"] == "beats the reference by 5 % ± 0.1 %"
     # one run 1 % behind, one 1 % ahead: their mean (0) would read "within error"
     straddle = pd.DataFrame({"reference_gap": [0.01, -0.01], "reference_gap_error": [0.001, 0.001]})
-    assert group_gap_label(straddle) == "-1 % to 1 % ± 0.1 % (2 runs)"
+    assert group_gap_label(straddle) == "beats the reference by up to 1 %, trails it by up to 1 % ± 0.1 % (2 runs)"
     ahead = pd.DataFrame({"reference_gap": [-0.01, -0.03], "reference_gap_error": [0.001, 0.002]})
     assert group_gap_label(ahead) == "beats the reference by 2 % ± 0.2 % (mean of 2)"
 

@@ -1,5 +1,5 @@
 """report.html: relative links (the folder can be moved), a relative source path (issue 21 item 1),
-design variables with units, gaps in percent, captions, repeats of one seed told apart from seeds."""
+design variables with units, gaps as recorded, captions, repeats of one seed told apart from seeds."""
 
 from __future__ import annotations
 
@@ -61,7 +61,7 @@ def test_report_of_a_relative_path_has_relative_links_that_survive_a_move(sweep,
 def test_report_table_units_gaps_captions_and_seeds(sweep):
     text = build_report(sweep)
     assert "b [mm]" in text and "q_min [mm]" in text  # design variables with units
-    assert "gap to reference [%]" in text
+    assert "<th>gap to reference</th>" in text  # its labels carry their own % (no "[%]")
     # each optimum with its estimated discretisation error, each gap as recorded (issue 23)
     best = read_dataset(sweep.parents[1] / "dataset", purposes=None)  # +debug=fast runs
     assert re.search(r"η = 0\.\d+ ± \d", text)
@@ -138,3 +138,71 @@ def test_runs_configs_show_each_config_once_or_say_there_is_none(tmp_path):
     assert "h4, mixed, w_d = 0.5, nsga2, seed 0; h4, mixed, w_d = 0.5, nsga2, seed 1" in html_text
     assert "experiment_name: h4_pareto" in html_text
     assert "No config recorded" in runs_configs(pd.DataFrame(rows), {})
+
+
+def test_optima_table_heads_the_gap_labels_without_a_unit():
+    """The gap column holds labels ("within error (< 0.19 %)", "beats the reference by 5 % ± 0.1 %")
+    that carry their own %: a header "[%]" promised numbers."""
+    import pandas as pd
+
+    from pipeline.report.html import optima_table
+
+    best = pd.DataFrame(
+        {
+            "run_id": ["a"],
+            "mechanism": ["h4"],
+            "objective": ["mixed"],
+            "w_d": [0.5],
+            "optimizer": ["cmaes"],
+            "seed": [0],
+            "objective_value": [0.2],
+            "volume": [1.0],
+            "reference_gap": [-0.05],
+            "reference_gap_label": ["beats the reference by 5 % ± 0.1 %"],
+        }
+    )
+    text = optima_table(best, {}, Path("."))
+    assert "<th>gap to reference</th>" in text and "[%]" not in text
+    assert '<td data-value="-5.0">beats the reference by 5 % ± 0.1 %</td>' in text
+
+
+def test_reference_page_types_keep_their_brackets():
+    """``Optional[X]`` reads ``X?``; other brackets stay (``dict[str, Any?``, ``list[float??`` before)."""
+    from pipeline.report.reference import reference_page
+
+    types = [row.split(" | ")[1] for row in reference_page().splitlines() if row.startswith("| `") and "?" in row]
+    assert types, "no optional field found"
+    broken = [t for t in types if t.count("[") != t.count("]") or "??" in t or ("?" in t and not t.endswith("?"))]
+    assert not broken, broken
+    for key, shown in (
+        ("mechanism.fixed", "dict[str, Any]"),
+        ("mechanism.orientation", "list[float]?"),
+        ("evaluate.resolution", "int?"),
+        ("optimizer.objectives", "list[str]"),
+    ):
+        assert f"| `{key}` | {shown} |" in reference_page(), key
+
+
+def test_reference_page_gives_inherited_fields_their_meaning():
+    """An optimiser's ``Config`` inherits ``seed``, ``polish``, ... from ``OptimizerConfig``, whose
+    ``#:`` comments were not read (empty meaning cells); a redeclared field without one keeps them."""
+    from dataclasses import dataclass
+
+    from pipeline.optimizers import OPTIMIZERS
+    from pipeline.optimizers.base import OptimizerConfig
+    from pipeline.report.reference import dataclass_table, field_comments
+
+    base = field_comments(OptimizerConfig)
+    inherited = [f for f in ("seed", "polish", "reference", "polish_evaluations") if base.get(f)]
+    assert len(inherited) == 4, base
+
+    @dataclass
+    class Redeclared(OptimizerConfig):
+        seed: int = 1
+
+    assert field_comments(Redeclared)["seed"] == base["seed"]
+    for name, cls in OPTIMIZERS.items():
+        rows = dataclass_table("optimizer.", cls.Config, skip=("name",))
+        for field in inherited:
+            (row,) = [r for r in rows if r.startswith(f"| `optimizer.{field}` |")]
+            assert row.endswith(f"| {base[field]} |"), (name, row)

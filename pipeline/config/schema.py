@@ -88,7 +88,8 @@ class EvaluateConfig:
     #: grid points per sampled axis (method grid: times the mechanism's factor of an axis where it
     #: has one, H4 1/2 along theta; null: the mechanism's default for the method)
     resolution: Optional[int] = None
-    #: the optimum is re-evaluated at refine_factor × resolution, [1, 8]
+    #: the optimum is re-evaluated at refine_factor × resolution, [2, 8]: the change is its error
+    #: bar (1 would report an error of 0)
     refine_factor: int = 4
     #: accept a resolution below the mechanism's minimum (tests, quick looks)
     allow_coarse: bool = False
@@ -106,7 +107,7 @@ class EvaluateConfig:
             self.resolution is None or 1 <= self.resolution <= 100_000,
             "null or an integer in [1, 100000]",
         )
-        check("evaluate.refine_factor", self.refine_factor, 1 <= self.refine_factor <= 8, "an integer in [1, 8]")
+        check("evaluate.refine_factor", self.refine_factor, 2 <= self.refine_factor <= 8, "an integer in [2, 8]")
         check("evaluate.max_nodes", self.max_nodes, 1_000 <= self.max_nodes <= 10**9, "an integer in [1000, 1e9]")
         check(
             "evaluate.max_hours",

@@ -21,6 +21,7 @@ from omegaconf.errors import MissingMandatoryValue, OmegaConfBaseException
 from pipeline.config.schema import MAX_HOURS, Config, ParallelConfig
 from pipeline.config.suggest import did_you_mean
 from pipeline.errors import ConfigError, check, check_writable
+from pipeline.evaluation.pool import worker_count
 from pipeline.optimizers import OPTIMIZERS
 from pipeline.optimizers.reference import expected_evaluations as reference_evaluations
 
@@ -77,7 +78,9 @@ def validate(cfg: DictConfig | Config) -> Config:
             raise ConfigError(f"{key} is invalid: {str(exc).splitlines()[0]}") from None
     else:
         typed = cfg
-    _check_budget(typed)
+    mech = typed.mechanism.build(typed.mechanism.centre)
+    _check_orientation(typed, mech)
+    _check_budget(typed, mech)
     _check_parallel(typed.parallel)
     _check_kernels()
     for key in ("output_dir", "cache_dir", "dataset_dir"):
@@ -98,12 +101,21 @@ def _missing_message(key: str) -> str:
     return f"{key} is missing: allowed {key}=VALUE (it has no default)"
 
 
-def _check_budget(c: Config) -> None:
+def _check_orientation(c: Config, mech) -> None:
+    """An orientation range only for a mechanism with an angular pose variable (it would be
+    ignored, yet split the cache and label the results)."""
+    if c.mechanism.orientation is not None and not any(mech.angular):
+        raise ConfigError(
+            f"mechanism.orientation={list(c.mechanism.orientation)} is invalid: {c.mechanism.name} has no angular "
+            f"pose variable ({', '.join(mech.pose_names)}); allowed: null"
+        )
+
+
+def _check_budget(c: Config, mech) -> None:
     """Grid resolution between the mechanism's minimum and the node and time budgets (the
     default resolution and the cost per node are the integration method's)."""
     from kinematics.workspace import default_resolution, grid_nodes, sampled_axes
 
-    mech = c.mechanism.build(c.mechanism.centre)
     orientation = c.mechanism.orientation_rad() or mech.default_orientation
     n_axes = max(len(sampled_axes(mech, orientation)), 1)
     res = c.evaluate.resolution
@@ -129,11 +141,13 @@ def _check_budget(c: Config) -> None:
     evaluations = c.sample.n + OPTIMIZERS[c.optimizer.name](c.optimizer).expected_evaluations()
     evaluations += c.optimizer.polish_evaluations if c.optimizer.polish else 0
     # the reference optimum is computed once per problem, by the first run that asks for it: the
-    # estimate is that run's
+    # estimate is that run's (cached stages are not looked up: it is an upper bound)
     reference = reference_evaluations(len(c.mechanism.design.lower)) if c.optimizer.reference else 0
     evaluations += reference
-    # nodes per second of the whole run: the method's per-worker throughput x the workers
-    rate = NODES_PER_SECOND / METHOD_COST[method] * c.parallel.n_jobs
+    # nodes per second of the whole run: the method's per-worker throughput x the workers, which a
+    # local backend caps at the cores this process may use (a dask cluster's are elsewhere)
+    workers = c.parallel.n_jobs if c.parallel.backend == "dask" else worker_count(c.parallel.n_jobs)
+    rate = NODES_PER_SECOND / METHOD_COST[method] * workers
 
     def hours_at(resolution: int) -> float:
         return evaluations * grid_nodes(mech, resolution, orientation, None, method) / rate / 3600
@@ -159,14 +173,16 @@ def _check_budget(c: Config) -> None:
     fixes.append(
         "fewer evaluations (sample.n, the optimizer's budget"
         + (", optimizer.reference=false" if reference else "")
-        + ") or more parallel.n_jobs"
+        + ")"
+        + (" or more parallel.n_jobs" if workers == c.parallel.n_jobs else "")
     )
     default = "" if c.evaluate.resolution is not None else f" (the default of {c.mechanism.name}, method {method})"
     raise ConfigError(
         f"evaluate.max_hours={c.evaluate.max_hours:g} is invalid: the run at evaluate.resolution={res}{default} "
-        f"is estimated at {hours:.3g} h ({evaluations} evaluations of {grid_nodes(mech, res, orientation, None, method):.3g} nodes"
+        f"is estimated at up to {hours:.3g} h ({evaluations} evaluations of {grid_nodes(mech, res, orientation, None, method):.3g} nodes"
         + (f", {reference} of them the reference optimum's," if reference else "")
-        + f" at {NODES_PER_SECOND / METHOD_COST[method]:.0e} nodes/s/worker x parallel.n_jobs={c.parallel.n_jobs}); "
+        + f" at {NODES_PER_SECOND / METHOD_COST[method]:.0e} nodes/s/worker x {workers} workers of "
+        f"parallel.n_jobs={c.parallel.n_jobs}; cached stages counted too); "
         f"allowed: {', or '.join(fixes)}"
     )
 

@@ -57,6 +57,7 @@ class CMAESConfig(OptimizerConfig):
     """
 
     name: str = "cmaes"
+    #: evaluation budget of the scout, the local runs and the restarts (the polish step's comes on top)
     max_evaluations: int = 800
     #: initial step of the IPOP restarts, a fraction of every variable's range
     sigma0: float = 0.3

@@ -46,6 +46,11 @@ def caption(row: pd.Series) -> str:
     return f"{what}, {row['optimizer']}, seed {int(row['seed'])}"
 
 
+def in_panel(frame: pd.DataFrame, objective: str, mechanism: str) -> pd.Series:
+    """The rows of ``frame`` that one (objective, mechanism) panel of :func:`convergence_figure` shows."""
+    return (frame["objective"].astype(str) == objective) & (frame["mechanism"].astype(str) == mechanism)
+
+
 def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
     """Best objective so far against the generation, one panel per (objective, mechanism) and one
     line per group: mean and range over distinct seeds, the group's reported optimum where it
@@ -63,7 +68,7 @@ def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
     panels = sorted({(str(o), str(m)) for o, m in zip(groups["objective"], groups["mechanism"])})
     fig, axes = panel_grid(len(panels), 5.0, 3.8)
     for ax, (objective, mechanism) in zip(axes, panels):
-        part = groups[(groups["objective"].astype(str) == objective) & (groups["mechanism"].astype(str) == mechanism)]
+        part = groups[in_panel(groups, objective, mechanism)]
         references_drawn = False
         for key, frame in part.groupby(keys, sort=True):
             group = dict(zip(keys, key))
@@ -109,7 +114,8 @@ def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
                     label=f"reference {reference:.4g}" + (f" (gap {gap})" if gap else ""),
                 )
         ax.set_xlabel("generation [1]")
-        unit = best.loc[best["objective"].astype(str) == objective, "objective_unit"].iloc[0]
+        # the panel's own unit: one objective has a unit per mechanism (V of a Tricept in mm·rad²)
+        unit = best.loc[in_panel(best, objective, mechanism), "objective_unit"].iloc[0]
         ax.set_ylabel(f"{symbol(objective)} [{unit}]")
         set_title(
             ax,
@@ -153,6 +159,11 @@ def workspace_gallery(rows: pd.DataFrame, configs: dict[str, dict], kind: str, c
     finite = [v for v in finite if v.size]
     vmin = 0.0 if kind == "inverse_condition" else (min(v.min() for v in finite) if finite else None)
     vmax = max(v.max() for v in finite) if finite else None
+    # each design is cut where its own plot slice lies (a Tricept at its own median c): one common
+    # slice is named once, in the figure's title, differing slices each in its panel's title
+    labels = {s.fixed_label for s in slices}
+    if len(labels) > 1:
+        titles = [f"{t}\nslice {s.fixed_label}" for t, s in zip(titles, slices)]
     fig, axes = panel_grid(len(slices), 4.2, 3.8, columns)
     fig.set_figwidth(fig.get_figwidth() + 1.0)  # the shared colour bar
     mesh = None
@@ -162,7 +173,10 @@ def workspace_gallery(rows: pd.DataFrame, configs: dict[str, dict], kind: str, c
     label = "1/κ [1]" if kind == "inverse_condition" else slices[0].extent_label
     if mesh is not None and (kind == "inverse_condition" or slices[0].extent is not None):
         fig.colorbar(mesh, ax=list(axes), label=f"{label} (one scale for all panels)")
-    where = f"slice {slices[0].fixed_label}" if slices[0].fixed_label else "whole workspace"
+    if len(labels) > 1:
+        where = "each at its own slice"
+    else:
+        where = f"slice {slices[0].fixed_label}" if slices[0].fixed_label else "whole workspace"
     title = f"{'workspace' if kind == 'workspace' else '1/κ'} of the best designs, {where}"
     fig.suptitle(fit_title(title, 0.9 * fig.get_figwidth(), 10), fontsize=10)
     return png(fig)

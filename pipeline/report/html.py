@@ -166,7 +166,7 @@ def optima_table(best: pd.DataFrame, dirs: dict[str, Path], base: Path) -> str:
         "V",
         "GDI",
         "SURI",
-        "gap to reference [%]",
+        "gap to reference",
         "flat variables",
         "at bounds",
         "files",

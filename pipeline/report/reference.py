@@ -38,7 +38,20 @@ SECTIONS = (
 
 
 def field_comments(cls: type) -> dict[str, str]:
-    """The ``#:`` comment lines written above each field of a dataclass, by field name."""
+    """The ``#:`` comment lines written above each field of a dataclass, by field name.
+
+    Inherited fields included: a field takes the comment of the nearest class in the MRO that
+    declares it (an optimiser's ``Config`` inherits ``seed`` and ``polish`` from
+    :class:`pipeline.optimizers.base.OptimizerConfig`, whose source alone holds their comments).
+    """
+    out: dict[str, str] = {}
+    for klass in reversed(cls.__mro__):
+        out.update(_own_field_comments(klass))
+    return out
+
+
+def _own_field_comments(cls: type) -> dict[str, str]:
+    """The ``#:`` comments of the fields declared in ``cls``'s own body."""
     try:
         source = textwrap.dedent(inspect.getsource(cls))
     except (OSError, TypeError):
@@ -51,7 +64,8 @@ def field_comments(cls: type) -> dict[str, str]:
             while k >= 0 and lines[k].strip().startswith("#:"):
                 above.insert(0, lines[k].strip()[2:].strip())
                 k -= 1
-            out[node.target.id] = " ".join(above)
+            if above:  # a redeclared field without a comment keeps its base class's
+                out[node.target.id] = " ".join(above)
     return out
 
 
@@ -68,7 +82,12 @@ def _default(f: dataclasses.Field) -> str:
 
 
 def _type(f: dataclasses.Field) -> str:
-    return str(f.type).replace("Optional[", "").replace("]", "?").replace("typing.", "")
+    """The field's annotation, ``Optional[X]`` written ``X?`` (only the outer bracket is Optional's:
+    ``dict[str, Any]`` keeps its own)."""
+    text = str(f.type).replace("typing.", "")
+    if text.startswith("Optional[") and text.endswith("]"):
+        return text[len("Optional[") : -1] + "?"
+    return text
 
 
 def _first_line(text: str | None) -> str:

@@ -249,7 +249,10 @@ def group_gap_label(runs: pd.DataFrame) -> str:
     if len(rows) == 1:
         return gap_label(float(gaps.iloc[0]), gap_error)
     if gaps.min() < -gap_error and gaps.max() > gap_error:
-        return f"{100 * gaps.min():.3g} % to {100 * gaps.max():.3g} % ± {100 * gap_error:.2g} % ({len(rows)} runs)"
+        return (
+            f"beats the reference by up to {100 * -gaps.min():.3g} %, trails it by up to {100 * gaps.max():.3g} % "
+            f"± {100 * gap_error:.2g} % ({len(rows)} runs)"
+        )
     return f"{gap_label(float(gaps.mean()), gap_error)} (mean of {len(rows)})"
 
 

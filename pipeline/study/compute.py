@@ -130,7 +130,12 @@ def compute(c: Config, run_dir: Path, timings: dict, stages: dict) -> dict[str, 
     config = c.result_dict()
     designs_table = evaluated.copy()
     designs_table["objective_value"] = scores
-    tables = {"designs": designs_table, "history": optimum["history"], "best": pd.DataFrame([optimum["best"]])}
+    # every table names the units of its own columns (attrs["units"] points to these columns)
+    best = optimum["best"]
+    designs_table["volume_unit"] = best["volume_unit"]
+    designs_table["objective_unit"] = best["objective_unit"]
+    history = optimum["history"].assign(objective_unit=best["objective_unit"])
+    tables = {"designs": designs_table, "history": history, "best": pd.DataFrame([best])}
     if optimum["front"] is not None:
         tables["front"] = optimum["front"]
     paths = {
