@@ -39,6 +39,8 @@ REFERENCE_GRID_POINTS = 9
 REFERENCE_MAX_GRID = 6561
 #: polish budget of each search of the reference (more generous than a run's)
 REFERENCE_POLISH = 300
+#: grid points (best, in distinct basins) the dense grid's polish starts from
+REFERENCE_GRID_POLISH = 3
 
 
 @dataclass
@@ -70,23 +72,15 @@ class BestKnown:
         return f"{self.found_by} (best of {len(self.searches)} searches; {self.agreeing} agree within 0.1 %)"
 
 
-def expected_evaluations(
-    n_var: int,
-    *,
-    seeds: tuple[int, ...] = REFERENCE_SEEDS,
-    de: tuple[int, int] | None = REFERENCE_DE,
-    grid_points: int = REFERENCE_GRID_POINTS,
-    max_grid: int = REFERENCE_MAX_GRID,
-    grid_polish: int = 3,
-    polish_evaluations: int = REFERENCE_POLISH,
-) -> int:
-    """Evaluations :func:`best_known` spends at most on a problem of ``n_var`` design variables,
-    with the same keyword arguments (each search's budget and each polish's)."""
-    total = len(seeds) * (CMAES(CMAESConfig()).expected_evaluations() + polish_evaluations)
-    if de is not None:
-        total += DE(DEConfig(population=de[0], generations=de[1])).expected_evaluations() + polish_evaluations
-    if grid_points**n_var <= max_grid:
-        total += grid_points**n_var + grid_polish * polish_evaluations
+def expected_evaluations(n_var: int) -> int:
+    """Evaluations :func:`best_known` spends at most, with its defaults, on a problem of ``n_var``
+    design variables (each search's budget and each polish's)."""
+    polish_evaluations = REFERENCE_POLISH
+    total = len(REFERENCE_SEEDS) * (CMAES(CMAESConfig()).expected_evaluations() + polish_evaluations)
+    total += DE(DEConfig(population=REFERENCE_DE[0], generations=REFERENCE_DE[1])).expected_evaluations()
+    total += polish_evaluations
+    if REFERENCE_GRID_POINTS**n_var <= REFERENCE_MAX_GRID:
+        total += REFERENCE_GRID_POINTS**n_var + REFERENCE_GRID_POLISH * polish_evaluations
     return int(total)
 
 
@@ -97,7 +91,7 @@ def best_known(
     de: tuple[int, int] | None = REFERENCE_DE,
     grid_points: int = REFERENCE_GRID_POINTS,
     max_grid: int = REFERENCE_MAX_GRID,
-    grid_polish: int = 3,
+    grid_polish: int = REFERENCE_GRID_POLISH,
     polish_evaluations: int = REFERENCE_POLISH,
     agreement: float = 1e-3,
 ) -> BestKnown:
