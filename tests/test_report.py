@@ -164,6 +164,10 @@ def test_optima_table_heads_the_gap_labels_without_a_unit():
     text = optima_table(best, {}, Path("."))
     assert "<th>gap to reference</th>" in text and "[%]" not in text
     assert '<td data-value="-5.0">beats the reference by 5 % ± 0.1 %</td>' in text
+    # w_d weighs the mixed index only: a volume run's stored 0 is no weight
+    assert "<td>0.5</td>" in text
+    volume = optima_table(best.assign(objective="volume", w_d=0.0), {}, Path("."))
+    assert "<td>volume</td><td></td><td>cmaes</td>" in volume
 
 
 def test_reference_page_types_keep_their_brackets():

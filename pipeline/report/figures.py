@@ -111,7 +111,8 @@ def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
                     ls="--",
                     lw=1,
                     color=line.get_color(),
-                    label=f"reference {reference:.4g}" + (f" (gap {gap})" if gap else ""),
+                    # as many digits as the optima table gives a run's value
+                    label=f"reference {reference:.6g}" + (f" (gap {gap})" if gap else ""),
                 )
         ax.set_xlabel("generation [1]")
         # the panel's own unit: one objective has a unit per mechanism (V of a Tricept in mm·rad²)

@@ -177,7 +177,8 @@ def optima_table(best: pd.DataFrame, dirs: dict[str, Path], base: Path) -> str:
             _cell(row.get("job")),
             _cell(row["mechanism"]),
             _cell(row["objective"]),
-            _cell(row["w_d"]),
+            # w_d weighs the mixed index only: another objective's stored 0 would read as a weight
+            _cell(row["w_d"] if str(row["objective"]) == "mixed" else None),
             _cell(row["optimizer"]),
             _cell(row["seed"]),
         ]
@@ -276,7 +277,10 @@ def build_report(source: Path, out: Path | None = None) -> str:
     if is_dataset(source):  # the line saying what it holds
         configuration = f"<p>{html.escape(config)}</p>"
     elif config:
-        configuration = f"<pre>{html.escape(config)}</pre>"
+        configuration = (
+            "<p>The sweep's base config; each job's own overrides are listed below it.</p>"
+            f"<pre>{html.escape(config)}</pre>"
+        )
     else:
         configuration = runs_configs(best, dirs)
     style = (STATIC / "report.css").read_text()
