@@ -349,9 +349,11 @@ def default_resolution(
     """
     if orientation is None:
         orientation = mechanism.default_orientation
-    n_axes = max(len(sampled_axes(mechanism, orientation, fixed)), 1)
+    n_axes = len(sampled_axes(mechanism, orientation, fixed))
     budget = mechanism.grid_nodes if method == "grid" else None
     nodes = int(mechanism.default_nodes if budget is None else budget)
+    if not n_axes:  # one node whatever the resolution: the budget itself, as a 1-axis grid's
+        return nodes
     # from above: the per-axis factors' product taken out of the budget, then down to the largest fit
     shrink = grid_nodes(mechanism, 1000, orientation, fixed, method) / 1000.0**n_axes
     res = int(math.ceil((nodes / shrink) ** (1.0 / n_axes))) + 1

@@ -260,3 +260,7 @@ def test_the_time_budget_counts_the_workers_the_machine_has(tmp_path, monkeypatc
     err = _refused([*bound, f"parallel.n_jobs={cores + 62}"], capsys)
     assert f"x {cores} workers of parallel.n_jobs={cores + 62}" in err and "more parallel.n_jobs" not in err, err
     assert _refused(bound, capsys).split(" h (", 1)[0] == err.split(" h (", 1)[0]  # the same estimate
+    # as many jobs as cores: one more would be capped too, so it is not suggested
+    assert "more parallel.n_jobs" not in _refused([*bound, f"parallel.n_jobs={cores}"], capsys)
+    if cores > 1:
+        assert "more parallel.n_jobs" in _refused([*bound, "parallel.n_jobs=1"], capsys)

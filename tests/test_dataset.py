@@ -167,3 +167,16 @@ def test_rerunning_a_study_adds_a_row_and_replaces_nothing(tmp_path):
     aggregate(tmp_path, dataset)
     runs = pd.read_parquet(dataset / "runs")
     assert len(runs) == 2 and runs["run_id"].is_unique and runs["launch_id"].eq(launch_id()).all()
+
+
+def test_every_table_of_a_run_has_the_unit_columns_its_units_name(tmp_path):
+    """A column whose unit is "volume_unit" or "objective_unit" (the row's own unit) has that column
+    beside it, in the Pareto front's table too."""
+    run = make_run(tmp_path / "run", tmp_path, "optimizer=nsga2", "mechanism=rpr2")
+    for table in ("best", "history", "designs", "front"):
+        schema = pq.read_schema(run / f"{table}.parquet")
+        for name in schema.names:
+            unit = ((schema.field(name).metadata or {}).get(b"unit") or b"").decode()
+            if unit.endswith("_unit"):
+                assert unit in schema.names, (table, name, unit)
+    assert set(pd.read_parquet(run / "front.parquet")["volume_unit"]) == {"mm²"}

@@ -174,7 +174,11 @@ def _check_budget(c: Config, mech) -> None:
         "fewer evaluations (sample.n, the optimizer's budget"
         + (", optimizer.reference=false" if reference else "")
         + ")"
-        + (" or more parallel.n_jobs" if workers == c.parallel.n_jobs else "")
+        + (
+            " or more parallel.n_jobs"
+            if c.parallel.backend == "dask" or worker_count(c.parallel.n_jobs + 1) > workers
+            else ""
+        )
     )
     default = "" if c.evaluate.resolution is not None else f" (the default of {c.mechanism.name}, method {method})"
     raise ConfigError(

@@ -137,7 +137,9 @@ def compute(c: Config, run_dir: Path, timings: dict, stages: dict) -> dict[str, 
     history = optimum["history"].assign(objective_unit=best["objective_unit"])
     tables = {"designs": designs_table, "history": history, "best": pd.DataFrame([best])}
     if optimum["front"] is not None:
-        tables["front"] = optimum["front"]
+        tables["front"] = optimum["front"].assign(
+            volume_unit=best["volume_unit"], objective_unit=best["objective_unit"]
+        )
     paths = {
         name: write_parquet(_with_keys(frame, keys), run_dir / f"{name}.parquet", config, units)
         for name, frame in tables.items()
