@@ -1032,7 +1032,7 @@ def _crossing_weights(slopes: np.ndarray) -> np.ndarray:
     """Weights (B, d) of each sampled axis's crossing in the integrand of a cut cell
     (:func:`_cut_cell_value`), from the slopes (B, d) of :func:`_cube_fraction`: ``(slope - 1)^4``
     normalised, 0 for a crossing at the far node or none; the nearest crossing alone where no
-    axis has weight (the cell is then not cut: its fraction is 0 or 1)."""
+    axis has weight (every crossing at a far node: the plane cuts the cell at its corners at most)."""
     above = np.where(slopes > 1.0, (slopes - 1.0) * (slopes - 1.0), 0.0)
     weights = above * above
     total = weights.sum(axis=1)

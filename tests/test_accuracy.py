@@ -287,19 +287,21 @@ STEP_MISSES = {
 }
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize(
-    "name",
-    [
+def _known_misses(names: tuple[str, ...], misses: dict[str, str]) -> list:
+    """``names`` as parameters, those in ``misses`` strict xfails with its reason."""
+    return [
         pytest.param(
             name,
-            marks=[pytest.mark.xfail(strict=True, raises=AssertionError, reason=STEP_MISSES[name])]
-            if name in STEP_MISSES
+            marks=[pytest.mark.xfail(strict=True, raises=AssertionError, reason=misses[name])]
+            if name in misses
             else [],
         )
-        for name in ("h4", "tricept", "delta", "rpr2", "rpr3")
-    ],
-)
+        for name in names
+    ]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", _known_misses(("h4", "tricept", "delta", "rpr2", "rpr3"), STEP_MISSES))
 def test_eta_along_a_line_has_no_steps(name):
     assert not has_a_step(eta_along_a_line(name, "grid"))
 
@@ -310,18 +312,7 @@ OLD_COUNT_MISSES = {"h4": "the old count's changes along this line are all irreg
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(
-    "name",
-    [
-        pytest.param(
-            name,
-            marks=[pytest.mark.xfail(strict=True, raises=AssertionError, reason=OLD_COUNT_MISSES[name])]
-            if name in OLD_COUNT_MISSES
-            else [],
-        )
-        for name in ("h4", "tricept", "delta", "rpr3")
-    ],
-)
+@pytest.mark.parametrize("name", _known_misses(("h4", "tricept", "delta", "rpr3"), OLD_COUNT_MISSES))
 def test_the_cell_centre_count_has_steps(name):
     """The test above can fail: on the old count it does (2-RPR's 400 x 400 count is smooth enough)."""
     assert has_a_step(eta_along_a_line(name, "midpoint"))
