@@ -17,7 +17,6 @@ reports against the true error), and the new method's cost phase by phase (:func
 from __future__ import annotations
 
 import cProfile
-import json
 import math
 import pstats
 import time
@@ -30,7 +29,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.ticker import NullFormatter  # noqa: E402
 
-from benchmarks.best_known import GOLDEN  # noqa: E402
+from benchmarks.best_known import load as load_best_known  # noqa: E402
 from kinematics import MECHANISMS, get_mechanism  # noqa: E402
 from kinematics.workspace import default_resolution, evaluate  # noqa: E402
 
@@ -65,7 +64,7 @@ PAPER = {
 
 def best_known_design(problem: str) -> list[float]:
     """The design vector of ``problem``'s best known optimum (benchmarks/best_known.json)."""
-    return [float(v) for v in json.loads(GOLDEN.read_text())[problem]["design"].values()]
+    return [float(v) for v in load_best_known()[problem]["design"].values()]
 
 
 #: documented optima: keyword arguments of ``get_mechanism`` (docs/reproduction.md) or design vectors

@@ -354,8 +354,10 @@ def default_resolution(
     nodes = int(mechanism.default_nodes if budget is None else budget)
     if not n_axes:  # one node whatever the resolution: the budget itself, as a 1-axis grid's
         return nodes
-    # from above: the per-axis factors' product taken out of the budget, then down to the largest fit
-    shrink = grid_nodes(mechanism, 1000, orientation, fixed, method) / 1000.0**n_axes
+    # from above (nodes are rounded up per axis): the budget over the product of the per-axis
+    # factors, then down to the largest fit
+    factors = [mechanism.grid_axis_nodes.get(name, 1.0) for name in sampled_axes(mechanism, orientation, fixed)]
+    shrink = math.prod(factors) if method == "grid" else 1.0
     res = int(math.ceil((nodes / shrink) ** (1.0 / n_axes))) + 1
     while res > 1 and grid_nodes(mechanism, res, orientation, fixed, method) > nodes:
         res -= 1

@@ -21,7 +21,7 @@ from omegaconf.errors import MissingMandatoryValue, OmegaConfBaseException
 from pipeline.config.schema import MAX_HOURS, Config, ParallelConfig
 from pipeline.config.suggest import did_you_mean
 from pipeline.errors import ConfigError, check, check_writable
-from pipeline.evaluation.pool import worker_count
+from pipeline.evaluation.pool import usable_cores, worker_count
 from pipeline.optimizers import OPTIMIZERS
 from pipeline.optimizers.reference import expected_evaluations as reference_evaluations
 
@@ -127,11 +127,15 @@ def _check_budget(c: Config, mech) -> None:
         )
     method = c.evaluate.method
     res = res or default_resolution(mech, orientation, None, method)
-    refined_nodes = grid_nodes(mech, res * c.evaluate.refine_factor, orientation, None, method)
+
+    def nodes_at(resolution: int) -> int:
+        return grid_nodes(mech, resolution, orientation, None, method)
+
+    refined_nodes = nodes_at(res * c.evaluate.refine_factor)
     if refined_nodes > c.evaluate.max_nodes:
         top = _largest_resolution(
             c.evaluate.max_nodes ** (1 / n_axes) / c.evaluate.refine_factor,
-            lambda r: grid_nodes(mech, r * c.evaluate.refine_factor, orientation, None, method) <= c.evaluate.max_nodes,
+            lambda r: nodes_at(r * c.evaluate.refine_factor) <= c.evaluate.max_nodes,
         )
         raise ConfigError(
             f"evaluate.resolution={res} is invalid: allowed <= {top} for {c.mechanism.name} "
@@ -150,7 +154,7 @@ def _check_budget(c: Config, mech) -> None:
     rate = NODES_PER_SECOND / METHOD_COST[method] * workers
 
     def hours_at(resolution: int) -> float:
-        return evaluations * grid_nodes(mech, resolution, orientation, None, method) / rate / 3600
+        return evaluations * nodes_at(resolution) / rate / 3600
 
     hours = hours_at(res)
     if hours <= c.evaluate.max_hours:
@@ -174,16 +178,12 @@ def _check_budget(c: Config, mech) -> None:
         "fewer evaluations (sample.n, the optimizer's budget"
         + (", optimizer.reference=false" if reference else "")
         + ")"
-        + (
-            " or more parallel.n_jobs"
-            if c.parallel.backend == "dask" or worker_count(c.parallel.n_jobs + 1) > workers
-            else ""
-        )
+        + (" or more parallel.n_jobs" if c.parallel.backend == "dask" or c.parallel.n_jobs < usable_cores() else "")
     )
     default = "" if c.evaluate.resolution is not None else f" (the default of {c.mechanism.name}, method {method})"
     raise ConfigError(
         f"evaluate.max_hours={c.evaluate.max_hours:g} is invalid: the run at evaluate.resolution={res}{default} "
-        f"is estimated at up to {hours:.3g} h ({evaluations} evaluations of {grid_nodes(mech, res, orientation, None, method):.3g} nodes"
+        f"is estimated at up to {hours:.3g} h ({evaluations} evaluations of {nodes_at(res):.3g} nodes"
         + (f", {reference} of them the reference optimum's," if reference else "")
         + f" at {NODES_PER_SECOND / METHOD_COST[method]:.0e} nodes/s/worker x {workers} workers of "
         f"parallel.n_jobs={c.parallel.n_jobs}; cached stages counted too); "

@@ -52,6 +52,11 @@ PARENT_POLL = 0.5
 _CAPS_LOGGED: set[tuple[int, int]] = set()
 
 
+def usable_cores() -> int:
+    """The cores this process may use (``joblib.cpu_count()``: CPU affinity and cgroup quotas)."""
+    return max(1, int(cpu_count()))
+
+
 def worker_count(n_jobs: int) -> int:
     """The processes a run evaluates with: ``n_jobs`` capped at the cores this process may use.
 
@@ -59,7 +64,7 @@ def worker_count(n_jobs: int) -> int:
     ``cpus_per_task``) and cgroup quotas (containers). Whatever the launcher,
     a run never starts more fitness workers than it has cores; a cap is logged.
     """
-    cores = max(1, int(cpu_count()))
+    cores = usable_cores()
     if n_jobs > cores and (n_jobs, cores) not in _CAPS_LOGGED:
         _CAPS_LOGGED.add((n_jobs, cores))
         log.info("parallel.n_jobs=%d capped at %d: the cores this process may use", n_jobs, cores)
