@@ -62,6 +62,7 @@ Default orientation ranges (``orientation=None``) are the mechanism's
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -453,8 +454,17 @@ class _PointValues:
 #: (``method="grid"``, a mechanism without margins): the crossing is located to
 #: ``h / 2**(BISECTIONS + 1)`` (h the grid step), well below the discretisation error
 BISECTIONS = 4
-#: largest ``h / distance`` of a crossing (a crossing on a node: the plane through the node)
+#: largest slope ``h / distance`` of a cut cell's plane (a crossing on a node: the plane through
+#: the node): the cut's inclusion-exclusion loses about ``eps * slope^2`` of a cell beyond it.
+#: Where a crossing is nearer, all the plane's slopes are scaled down together
+#: (:func:`_plane_slopes`), so that the plane keeps its direction
 _MAX_SLOPE = 1e4
+#: a plane's slopes below this, after that scaling, are 0: the cut loses ``eps / slope`` of a cell
+#: to cancellation, while the plane, within 1e-4 of the node, tilts by ``slope * 1e-4`` (1e-7)
+_MIN_PLANE_SLOPE = 1e-3
+#: largest ``h / distance`` of a crossing (a crossing on a node): its weights
+#: (:func:`_crossing_weights`) take the fourth power, which stays finite
+_NODE_SLOPE = 1e60
 
 
 def _crossings(
@@ -486,9 +496,11 @@ def _crossings(
        where the three values change sign, the first of the margins' roots the crossing.
        Third order in the edge length for smooth margins, and continuous in the design.
     3. The integrands at the crossing are those at ``t1`` (``1/kappa`` at the limit where the
-       dexterity margin is the first); where ``t1`` is unreachable, those at the crossing
-       found in step 2 (a second look), and those of the inside end where that is
-       unreachable too.
+       dexterity margin is the first); where ``t1`` is unreachable, those of a second look
+       next to the crossing found in step 2 (:func:`_second_look`), and those of the inside
+       end where no point short of it is reachable.
+    4. Where the dexterity margin comes first but is unknown at the outside end, one more look
+       and the parabola through its three values (:func:`_dexterity_parabola`).
 
     Rows the margins cannot place (the mechanism has none, one is undefined at an end, or
     none changes sign) are bisected ``steps`` times by the membership test instead
@@ -532,23 +544,47 @@ def _crossings(
         reach_1 = values.margins(at) if reach.shape[1] else np.empty((look.size, 0))
         dex_1 = _dexterity_margin(ic_1, limit)
         t2, which = refined(reach, np.ascontiguousarray(reach_1), dex_in, dex_1, dex_out, look, t1)
-        t[look] = t2
         if start.shape[0]:
-            # where t1 is unreachable, a second look at the crossing itself: the inside end's
-            # integrands, the fallback, lie a cell away from it and differed from the value at
-            # a reachable t1 by a step (the crossing's value at H4's optimum: 1/kappa 0.15 for 0.01)
+            # the look whose margins the crossing's model used: t1, or the second look's point
+            t_look = t1.copy()
             again = np.nonzero(~np.isfinite(ic_1) & (which >= 0))[0]
             if again.size:
-                at_2 = at[again]
-                at_2[np.arange(again.size), column[look[again]]] = p_in[look[again]] + t2[again] * (
-                    p_out[look[again]] - p_in[look[again]]
+                t2[again], which[again], weight_1[again], ic_1[again], t_look[again] = _second_look(
+                    values,
+                    at[again],
+                    column[look[again]],
+                    p_in[look[again]],
+                    p_out[look[again]],
+                    t2[again],
+                    which[again],
+                    start[0, look[again]],
+                    dex_in[look[again]],
+                    reach.shape[1],
                 )
-                _, weight_1[again], ic_1[again], _ = values(at_2)
+            dex_look = _dexterity_margin(ic_1, limit)
+            curved = np.nonzero(
+                (which == reach.shape[1]) & np.isnan(dex_out[look]) & (t_look > 0.0) & np.isfinite(dex_look)
+            )[0]
+            if curved.size:
+                t2[curved], weight_1[curved] = _dexterity_parabola(
+                    values,
+                    refined,
+                    at[curved],
+                    column[look[curved]],
+                    p_in[look[curved]],
+                    p_out[look[curved]],
+                    t_look[curved],
+                    t2[curved],
+                    dex_in[look[curved]],
+                    dex_look[curved],
+                    weight_1[curved],
+                )
             # the integrands at the reachable points only (the others keep the inside end's)
             reachable_1 = np.nonzero(np.isfinite(ic_1))[0]
             ic_there = np.where(which[reachable_1] == reach.shape[1], limit, ic_1[reachable_1])
             every = np.ones(reachable_1.size, dtype=bool)
             value[:, look[reachable_1]] = _integrands(every, weight_1[reachable_1], ic_there, start.shape[0])
+        t[look] = t2
     crossing = p_in + t * (p_out - p_in)
     left = np.nonzero(np.isnan(t))[0]
     if left.size and steps is not None:
@@ -556,6 +592,113 @@ def _crossings(
             values, probe[left], column[left], p_in[left], p_out[left], start[:, left], steps
         )
     return crossing, value
+
+
+def _dexterity_parabola(
+    values: _PointValues,
+    refined: Callable,
+    at: np.ndarray,
+    column: np.ndarray,
+    p_in: np.ndarray,
+    p_out: np.ndarray,
+    t1: np.ndarray,
+    t2: np.ndarray,
+    dex_in: np.ndarray,
+    dex_1: np.ndarray,
+    weight_1: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Step 2 of :func:`_crossings` for the M rows whose dexterity margin comes first but is
+    unknown at the outside end (unreachable there): it was placed on the line through its
+    values at the inside end (``dex_in``) and at ``t1`` (``dex_1``), at ``t2`` (fractions of the
+    way from ``p_in`` to ``p_out`` (M,) along column ``column`` (M,) of the poses ``at``
+    (M, dof)). A look at ``t2``, and the parabola through the three values (``refined`` on the
+    edge ``[0, t1]``), its root in the bracket where they change sign.
+
+    Why: where the outside end is reachable its margin is known and the crossing lies on the
+    parabola through three values; as that end turned unreachable the line took over, and the
+    crossing jumped by the line's error (a cell's three crossings by 1 % of the cell at once at
+    H4's optimum, 2e-6 of eta). Near the end's reach boundary the look at ``t1`` takes its
+    place, so the two parabolas meet.
+
+    Returns the crossing and the weight there (at the look at ``t2``, the nearer one; at
+    ``t1`` where that look is unreachable), (M,) each.
+    """
+    rows = np.arange(t2.size)
+    at[rows, column] = p_in + t2 * (p_out - p_in)
+    _, weight_2, ic_2, _ = values(at)
+    dex_2 = _dexterity_margin(ic_2, values.min_ic)
+    no_reach = np.empty((2 * t2.size, 0))
+    share, found = refined(no_reach, np.empty((t2.size, 0)), dex_in, dex_2, dex_1, rows, t2 / t1)
+    crossing = np.where(found == 0, share * t1, t2)
+    return crossing, np.where(np.isfinite(ic_2), weight_2, weight_1)
+
+
+#: the second look of :func:`_second_look` tries the crossing and the points ``4**-k`` of the
+#: way short of it, k = 1 .. LOOK_DEPTH (down to 1e-6), the nearest reachable one its look
+LOOK_DEPTH = 10
+
+
+def _second_look(
+    values: _PointValues,
+    at: np.ndarray,
+    column: np.ndarray,
+    p_in: np.ndarray,
+    p_out: np.ndarray,
+    t2: np.ndarray,
+    which: np.ndarray,
+    weight_in: np.ndarray,
+    dex_in: np.ndarray,
+    dexterity: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Step 3 of :func:`_crossings` where the look at ``t1`` is unreachable (M rows): the
+    integrands at the crossing ``t2`` (M,) of step 2, a fraction of the way from ``p_in``
+    (M,) to ``p_out`` (M,) along column ``column`` (M,) of the poses ``at`` (M, dof).
+
+    Why: the inside end's integrands lie a cell away (1/kappa 0.15 at H4's optimum where it is
+    0.01 at the crossing), and ``t2`` lies on the crossing's model, just outside as often as
+    inside: a look there alone left the inside end's integrands on one side and the crossing's
+    on the other, a step as the look turned reachable (H4's h4_mixed best known sat on such a
+    spike, 2e-5 of eta). Where ``t2`` is unreachable the look goes to the nearest reachable of
+    the points ``4**-k`` of the way short of it (:data:`LOOK_DEPTH`; one more call for all). The
+    value there differs from the one at ``t2`` by that fraction of the slope, and the look
+    moves by a factor 4 as the reach boundary passes one of them. The reach margins alone
+    placed ``t2`` when the dexterity margin ``dex_in`` (M,) was unknown at the outside end;
+    where the look's dexterity margin is negative, the dexterity limit comes first: on the line
+    of ``1/kappa^2 - limit^2`` (linear in the distance to a singular reach boundary, where
+    ``1/kappa`` falls to 0) through the inside end and the look, with the weight (``weight_in``
+    at the inside end (M,)) linear between them.
+
+    Returns ``t2``, ``which`` (``dexterity``, the dexterity margin's column, where it comes
+    first), the weight and ``1/kappa`` (NaN: no reachable look, the inside end's integrands
+    remain) at the crossing, and the look's point (a fraction as ``t2``), (M,) each.
+    """
+    rows = np.arange(t2.size)
+    t_look = t2.copy()
+    at[rows, column] = p_in + t_look * (p_out - p_in)
+    _, weight, ic, _ = values(at)
+    lost = np.nonzero(~np.isfinite(ic))[0]
+    if lost.size:  # the points 4^-k of the way short of t2 (k = LOOK_DEPTH .. 1), in one call
+        share = 1.0 - 0.25 ** np.arange(LOOK_DEPTH, 0, -1)
+        t_points = t2[lost, None] * share[None, :]  # (lost, points), nearest to t2 first
+        probes = np.repeat(at[lost], share.size, axis=0)
+        probes[np.arange(probes.shape[0]), np.repeat(column[lost], share.size)] = (
+            p_in[lost, None] + t_points * (p_out - p_in)[lost, None]
+        ).ravel()
+        _, weights, ics, _ = values(probes)
+        ics, weights = ics.reshape(lost.size, share.size), weights.reshape(lost.size, share.size)
+        nearest = np.argmax(np.isfinite(ics), axis=1)  # none reachable: NaN stays
+        inner = np.arange(lost.size)
+        t_look[lost], weight[lost], ic[lost] = t_points[inner, nearest], weights[inner, nearest], ics[inner, nearest]
+    dex_look = _dexterity_margin(ic, values.min_ic)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        s = t_look * dex_in / (dex_in - dex_look)
+    first = np.nonzero((dex_look < 0.0) & (dex_in >= 0.0) & (s >= 0.0) & (s <= t2))[0]
+    t2, which = t2.copy(), which.copy()
+    t2[first], which[first] = s[first], dexterity
+    with np.errstate(invalid="ignore", divide="ignore"):
+        share = np.where(t_look[first] > 0.0, s[first] / t_look[first], 0.0)
+    weight[first] = weight_in[first] + share * (weight[first] - weight_in[first])
+    return t2, which, weight, ic, t_look
 
 
 def _dexterity_margin(ic: np.ndarray, limit: float) -> np.ndarray:
@@ -990,8 +1133,8 @@ def _boundary_corrected_sums(
     dist = nearest.reshape(n_sampled, -1)[:, boundary].T
     sign = toward.reshape(n_sampled, -1)[:, boundary].T
     with np.errstate(divide="ignore"):
-        slopes = np.where(np.isfinite(dist), np.minimum(1.0 / np.maximum(dist, 0.0), _MAX_SLOPE), 0.0)
-    own, centroid = _cube_fraction(slopes)
+        slopes = np.where(np.isfinite(dist), np.minimum(1.0 / np.maximum(dist, 0.0), _NODE_SLOPE), 0.0)
+    own, centroid = _faded_cube_fraction(slopes)
     is_in = inside.ravel()[boundary]
     with np.errstate(divide="ignore", invalid="ignore"):
         # centroid of the inside part: the node's side for an inside node, the rest of the
@@ -1028,6 +1171,87 @@ def _boundary_corrected_sums(
         # the boundary nodes' own values (in the plain sums) replaced by their cells' parts
         totals.append(float(fraction @ value) - float(node.sum()))
     return weight_sum + totals[0], ic_sum + totals[1]
+
+
+#: distance (cell units) beyond which a crossing's pull on a cut cell's plane fades, to none at
+#: the neighbouring node (:func:`_faded_cube_fraction`)
+FADE_FROM = 0.75
+
+
+def _fade_weights(slopes: np.ndarray) -> np.ndarray:
+    """Weight (any shape) of each crossing, from its slope ``c = h / distance``, in the cut of a
+    cell (:func:`_faded_cube_fraction`): 1 up to the distance :data:`FADE_FROM`, a smoothstep
+    falling to 0 at the neighbouring node (``c = 1``), 0 beyond (no crossing: ``c = 0``).
+    :func:`_fade_weight` is the same for one slope (compiled path)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = (1.0 - 1.0 / slopes) / (1.0 - FADE_FROM)
+        smooth = u * u * (3.0 - 2.0 * u)
+    return np.where(slopes * FADE_FROM >= 1.0, 1.0, np.where(slopes > 1.0, smooth, 0.0))
+
+
+@kernels.inline_jit
+def _fade_weight(c):
+    """:func:`_fade_weights` of one slope (the same operations)."""
+    if c * FADE_FROM >= 1.0:
+        return 1.0
+    if c <= 1.0:
+        return 0.0
+    u = (1.0 - 1.0 / c) / (1.0 - FADE_FROM)
+    return u * u * (3.0 - 2.0 * u)
+
+
+def _plane_slopes(slopes: np.ndarray) -> np.ndarray:
+    """The slopes (N, d) of a cut cell's plane from its crossings' ``slopes`` (N, d): scaled
+    together so that the largest is at most :data:`_MAX_SLOPE`, those then below
+    :data:`_MIN_PLANE_SLOPE` 0. Why together: a node within 1e-4 of the boundary has its
+    crossings at distances whose ratios give the plane's direction; capping each slope alone
+    turned the plane as the node approached (the integrand at its centroid by 3 % of a
+    column's height at H4's optimum). :func:`_plane_slope` is the same for one slope."""
+    top = slopes.max(axis=1, initial=0.0)[:, None]
+    scaled = slopes * np.where(top > _MAX_SLOPE, _MAX_SLOPE / np.where(top > 0.0, top, 1.0), 1.0)
+    return np.where(scaled >= _MIN_PLANE_SLOPE, scaled, 0.0)
+
+
+@kernels.inline_jit
+def _plane_slope(c, top):
+    """:func:`_plane_slopes` of one slope ``c``, the cell's largest being ``top``."""
+    scaled = c * (_MAX_SLOPE / top if top > _MAX_SLOPE else 1.0)
+    return scaled if scaled >= _MIN_PLANE_SLOPE else 0.0
+
+
+def _faded_cube_fraction(slopes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_cube_fraction` of a cut cell whose crossings beyond :data:`FADE_FROM` fade out:
+    the cuts with and without each such crossing, blended by its :func:`_fade_weights` (the
+    fraction, and the first moments, whose ratio is the centroid).
+
+    Why: a crossing lives on a cut edge, and the edge stops being cut when the crossing reaches
+    its far end (that node changes sides). At its full slope the plane through it still cut
+    the cell's corners there (6 % of a Tricept cell) and lost them in one step as the crossing
+    vanished: a step of 8e-6 of eta along a Tricept optimum's line. Beyond half a cell the
+    crossing lies outside the cell and only tilts the plane. Why a blend of cuts rather than a
+    fading slope: a plane of slope near 0 costs the cut's inclusion-exclusion ``eps / slope``
+    of a cell to cancellation; each cut here has slopes 0 or at least 1 (at least
+    :data:`_MIN_PLANE_SLOPE` where :func:`_plane_slopes` scales them down next to a node).
+    Exact for a planar boundary whose crossings lie within :data:`FADE_FROM`. ``slopes`` (N, d)
+    (``h / distance``, at most :data:`_NODE_SLOPE`), returns as :func:`_cube_fraction`."""
+    n, dims = slopes.shape
+    fade = _fade_weights(slopes)
+    plane = _plane_slopes(slopes)
+    volume = np.zeros(n)
+    moment = np.zeros((n, dims))
+    for dropped in range(1 << dims):  # the crossings left out of this cut
+        out = np.array([(dropped >> j) & 1 for j in range(dims)], dtype=bool)
+        # an axis without a crossing (slope 0) has one cut, its "kept" one
+        weight = np.prod(np.where(slopes > 0.0, np.where(out, 1.0 - fade, fade), np.where(out, 0.0, 1.0)), axis=1)
+        rows = np.nonzero(weight > 0.0)[0]
+        if not rows.size:
+            continue
+        part, centroid = _cube_fraction(np.where(out, 0.0, plane[rows]))
+        volume[rows] += weight[rows] * part
+        moment[rows] += (weight[rows] * part)[:, None] * centroid
+    with np.errstate(divide="ignore", invalid="ignore"):
+        centroid = np.where(volume[:, None] > 0.0, moment / volume[:, None], 0.0)
+    return volume, centroid
 
 
 def _crossing_weights(slopes: np.ndarray) -> np.ndarray:
@@ -1094,6 +1318,51 @@ def _plane_cut(c, fraction_centroid, active, moment):
 
 
 @kernels.inline_jit
+def _faded_plane_cut(c, plane, cut, part, active, moment):
+    """:func:`_faded_cube_fraction` of one cell: slopes ``c`` (d,) in, ``cut`` (d + 1,) out (as
+    :func:`_plane_cut`); ``plane`` (d,), ``part`` (d + 1,), ``active``, ``moment`` scratch. Only
+    the cuts of non-zero weight are made (a crossing of weight 1 is always kept, one of weight
+    0 always left out: most cells have no fading crossing and one cut), in the numpy path's
+    order, so that the sums are the same."""
+    d = c.shape[0]
+    top = 0.0
+    fading = 0  # bit j: axis j's crossing fades
+    gone = 0  # bit j: axis j's crossing lies at the far node (weight 0): always left out
+    for j in range(d):
+        top = max(top, c[j])
+        if c[j] > 0.0:
+            fade = _fade_weight(c[j])
+            if 0.0 < fade < 1.0:
+                fading |= 1 << j
+            elif fade == 0.0:
+                gone |= 1 << j
+    for j in range(d + 1):
+        cut[j] = 0.0
+    dropped = 0
+    while True:  # the subsets of the fading axes, in increasing order
+        weight = 1.0
+        for j in range(d):
+            if (fading >> j) & 1:
+                fade = _fade_weight(c[j])
+                weight *= (1.0 - fade) if (dropped >> j) & 1 else fade
+            plane[j] = 0.0 if ((dropped | gone) >> j) & 1 else _plane_slope(c[j], top)
+        if weight > 0.0:
+            _plane_cut(plane, part, active, moment)
+            cut[0] += weight * part[0]
+            for j in range(d):
+                cut[j + 1] += (weight * part[0]) * part[j + 1]
+        if dropped == fading:
+            break
+        dropped = ((dropped | ~fading) + 1) & fading  # the next subset of ``fading``
+    if cut[0] > 0.0:
+        for j in range(d):
+            cut[j + 1] = cut[j + 1] / cut[0]
+    else:
+        for j in range(d):
+            cut[j + 1] = 0.0
+
+
+@kernels.inline_jit
 def _fourth(x):
     """``x**4`` as the numpy path computes it (:func:`_crossing_weights`)."""
     square = x * x
@@ -1110,12 +1379,15 @@ def _crossing_weight(c, k, near, total):
 
 
 @kernels.inline_jit
-def _cut_cell_value(inside, f0, f1, p, c, near, toward, crossing_values, strides, sizes, cut, active, moment):
+def _cut_cell_value(
+    inside, f0, f1, p, c, near, toward, crossing_values, strides, sizes, plane, cut, part, active, moment
+):
     """The cut cell of node ``p`` (flat index): its inside fraction times the integrands at the
     centroid of its inside part, ``(fraction f0, fraction f1)`` (:func:`_boundary_corrected_sums`
     for one node). ``c`` (d,) the slopes ``h / distance`` of its nearest crossing per sampled
     axis (0: none), ``near`` the axis of the largest, ``toward`` (d,) their directions (+-1) and
-    ``crossing_values`` (d, 2) the integrands there; ``cut``, ``active``, ``moment`` scratch.
+    ``crossing_values`` (d, 2) the integrands there; ``plane``, ``cut``, ``part``, ``active``,
+    ``moment`` scratch. The cut is :func:`_faded_plane_cut`'s.
 
     The integrands at the centroid, linear along each axis with a crossing: for an inside node
     from the node and the node behind it (away from the crossing), at the centroid's offset
@@ -1128,7 +1400,7 @@ def _cut_cell_value(inside, f0, f1, p, c, near, toward, crossing_values, strides
     but less accurate, GDI 0.12-0.13 % against 0.08-0.09 % on H4's and the Delta's designs of
     docs/accuracy.md (a one-sided difference along a far crossing's axis is a poor slope)."""
     d = c.shape[0]
-    _plane_cut(c, cut, active, moment)
+    _faded_plane_cut(c, plane, cut, part, active, moment)
     own = cut[0]
     total = 0.0
     for k in range(d):
@@ -1169,7 +1441,7 @@ def _cut_cell_value(inside, f0, f1, p, c, near, toward, crossing_values, strides
 
 @kernels.vector_jit
 def _cut_cell_corrections(
-    inside, f0, f1, node, entry, axis, crossing, value, positions, strides, sizes, steps_of, max_slope
+    inside, f0, f1, node, entry, axis, crossing, value, positions, strides, sizes, steps_of, node_slope
 ):
     """Compiled :func:`_boundary_corrected_sums` after the crossings, sparse: only the nodes
     next to a crossing are visited. Crossing ``i`` lies on a grid edge along sampled axis
@@ -1189,7 +1461,9 @@ def _cut_cell_corrections(
     toward = np.empty(d)
     crossing_values = np.empty((d, 2))
     c = np.empty(d)
+    plane = np.empty(d)
     cut = np.empty(d + 1)
+    part = np.empty(d + 1)
     active = np.empty(d, dtype=np.int64)
     moment = np.empty(d)
     total0 = 0.0
@@ -1214,13 +1488,13 @@ def _cut_cell_corrections(
         near = -1
         for k in range(d):
             if nearest[k] < np.inf:
-                c[k] = min(1.0 / nearest[k], max_slope) if nearest[k] > 0.0 else max_slope
+                c[k] = min(1.0 / nearest[k], node_slope) if nearest[k] > 0.0 else node_slope
                 if near < 0 or c[k] > c[near]:
                     near = k
             else:
                 c[k] = 0.0
         v0, v1 = _cut_cell_value(
-            inside, f0, f1, p, c, near, toward, crossing_values, strides, sizes, cut, active, moment
+            inside, f0, f1, p, c, near, toward, crossing_values, strides, sizes, plane, cut, part, active, moment
         )
         total0 += v0 - f0[p]
         total1 += v1 - f1[p]
@@ -1358,7 +1632,7 @@ def _boundary_corrected_sums_compiled(
         strides,
         sizes,
         steps_of,
-        _MAX_SLOPE,
+        _NODE_SLOPE,
     )
     return float(f0.sum()) + correction0, float(f1.sum()) + correction1
 
@@ -1374,20 +1648,20 @@ SECTIONS = 16
 
 
 def _multisect(
-    values: _PointValues,
+    kept: Callable[[np.ndarray], np.ndarray],
     probe: np.ndarray,
     column: np.ndarray,
     p_in: np.ndarray,
     p_out: np.ndarray,
     rounds: int,
 ) -> np.ndarray:
-    """The outermost boundary crossing between an inside (``p_in``) and an outside (``p_out``)
-    value of column ``column`` (per row) of the poses ``probe`` (N, dof), to
-    ``|p_out - p_in| / SECTIONS**rounds``: each round evaluates ``SECTIONS - 1`` evenly spaced
-    points of every row's bracket in one call and keeps the part between the inside point
-    nearest the outside end and its outer neighbour. Fewer calls than bisection (one per 4
-    halvings) for few rows, where a call's fixed cost dominates. Returns the middle of the last
-    bracket (N,)."""
+    """The outermost change of ``kept`` (poses (N, dof) -> (N,) bool: reachable, say) between a
+    kept (``p_in``) and a lost (``p_out``) value of column ``column`` (per row) of the poses
+    ``probe`` (N, dof), to ``|p_out - p_in| / SECTIONS**rounds``: each round evaluates
+    ``SECTIONS - 1`` evenly spaced points of every row's bracket in one call and keeps the part
+    between the kept point nearest the lost end and its outer neighbour. Fewer calls than
+    bisection (one per 4 halvings) for few rows, where a call's fixed cost dominates. Returns
+    the middle of the last bracket (N,)."""
     rows = probe.shape[0]
     fractions = np.arange(1, SECTIONS) / SECTIONS
     probes = np.repeat(probe, SECTIONS - 1, axis=0)
@@ -1396,7 +1670,7 @@ def _multisect(
     for _ in range(rounds):
         points = p_in[:, None] + fractions[None, :] * (p_out - p_in)[:, None]  # (N, SECTIONS - 1)
         probes[rows_of, columns] = points.ravel()
-        inside = values(probes)[0].reshape(rows, SECTIONS - 1)
+        inside = kept(probes).reshape(rows, SECTIONS - 1)
         # the last inside point (0: p_in itself), counted from p_in
         last = np.where(inside.any(axis=1), SECTIONS - 1 - np.argmax(inside[:, ::-1], axis=1), 0)
         width = p_out - p_in
@@ -1415,39 +1689,47 @@ def _occupied_box(
     sampled: list[int],
     rounds: int = 3,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The pose box narrowed, along each sampled axis, to the workspace's extent.
+    """The pose box narrowed, along each sampled axis, to the reachable set's extent (which
+    holds the workspace, its dexterous part).
 
     Why: a mechanism's box is a bound from the geometry and the workspace may
     fill a fraction of it (Tricept: c in about 300-650 of 0-926 mm); the grid's
     cells then go where the workspace is. On a grid of about 1/8 of the nodes
     (``resolution / COARSE**(3/d)`` per axis, d the sampled axes) the extent along axis j is
     the lowest / highest boundary crossing on the edges below the lowest (above the highest)
-    layer of inside nodes, widened by one coarse cell (so that the box holds the whole edge,
-    wherever on it the crossing lies) and clipped to the box; a workspace in the first or
+    layer of reachable nodes, widened by one coarse cell (so that the box holds the whole edge,
+    wherever on it the crossing lies) and clipped to the box; a set in the first or
     last layer keeps that face. Each crossing moves continuously with the design, and so
     does their minimum: the grid, and the integral, stay continuous. The crossings are
-    placed on the margins (:func:`_crossings`); where the mechanism has none the few extreme
-    edges are cut in :data:`SECTIONS` parts ``rounds`` times (:func:`_multisect`, one call
-    per round), so that the box moves by no more than ``SECTIONS**-rounds`` (``2**-12``) of a
-    coarse cell at a time. An empty coarse grid keeps the box.
+    placed on the reach margins (:func:`_crossings`); where the mechanism has none the few
+    extreme edges are cut in :data:`SECTIONS` parts ``rounds`` times (:func:`_multisect`, one
+    call per round), so that the box moves by no more than ``SECTIONS**-rounds`` (``2**-12``)
+    of a coarse cell at a time. An empty coarse grid keeps the box.
+
+    Why reachable, not dexterous: the layers and the crossings must follow one set. With the
+    layers of dexterous nodes and crossings on the reach margins, an extreme crossing jumped
+    where an outside node turned dexterous (by 1.5 % of a coarse cell at H4's h4_mixed best
+    known, and with it every node of the grid: a step of 3e-6 of eta); placing the dexterity
+    limit too costs looks (the coarse pass took twice as long). The dexterity limit of the
+    built-in configs (1/kappa >= 0.01) trims the reachable set little.
     """
     coarse = max(int(resolution / COARSE ** (3 / len(sampled))), 4)
     axes, _ = _grid_axes(mechanism, coarse, orientation, fixed, 0.5, exact, box, anisotropic=True)
     shape = tuple(len(a) for a in axes)
-    inside = np.concatenate([values(_grid_poses(axes, start, stop))[0] for start, stop in _chunk_bounds(axes)]).reshape(
-        shape
-    )
+    reachable = np.concatenate(
+        [np.isfinite(values(_grid_poses(axes, start, stop))[2]) for start, stop in _chunk_bounds(axes)]
+    ).reshape(shape)
     lo, hi = box[0].astype(float).copy(), box[1].astype(float).copy()
-    if not inside.any():
+    if not reachable.any():
         return lo, hi
     jobs = []  # (axis, side, probes, p_in, p_out)
     for j in sampled:
         other = tuple(k for k in range(len(shape)) if k != j)
-        layers = np.nonzero(inside.any(axis=other))[0]
+        layers = np.nonzero(reachable.any(axis=other))[0]
         for side, layer, beyond in (("lo", layers[0], layers[0] - 1), ("hi", layers[-1], layers[-1] + 1)):
             if beyond < 0 or beyond >= shape[j]:
                 continue  # the workspace reaches the end layer: keep the face
-            idx = list(np.nonzero(np.take(inside, [layer], axis=j)))
+            idx = list(np.nonzero(np.take(reachable, [layer], axis=j)))
             idx[j] = np.full(idx[0].size, layer)
             jobs.append(
                 (
@@ -1462,12 +1744,15 @@ def _occupied_box(
         probe = np.vstack([job[2] for job in jobs])
         column = np.concatenate([np.full(job[3].size, job[0]) for job in jobs])
         p_in, p_out = np.concatenate([job[3] for job in jobs]), np.concatenate([job[4] for job in jobs])
-        # on the margins where the mechanism has them (any crossing of the edge will do: the box
-        # is widened by the edge's length), by multisection elsewhere
+        # on the reach margins where the mechanism has them (any crossing of the edge will do: the
+        # box is widened by the edge's length; no integrands, so no dexterity margin), by
+        # multisection of reachability elsewhere
         crossing, _ = _crossings(values, probe, column, p_in, p_out, np.empty((0, p_in.size)), None)
         left = np.nonzero(np.isnan(crossing))[0]
         if left.size:
-            crossing[left] = _multisect(values, probe[left], column[left], p_in[left], p_out[left], rounds)
+            crossing[left] = _multisect(
+                lambda poses: np.isfinite(values(poses)[2]), probe[left], column[left], p_in[left], p_out[left], rounds
+            )
         start = 0
         for j, side, _, p_in, _ in jobs:
             stop = start + p_in.size

@@ -302,7 +302,7 @@ def test_a_cut_cell_s_integrand_is_continuous_where_two_crossings_are_as_near(ce
     f1[p] = 0.5 if centre_inside else 0.0
     crossing_values = np.array([[1.0, 0.2], [1.0, 0.7], [0.0, 0.0]])  # x and y crossings differ
     toward = np.array([1.0, -1.0, 1.0])
-    scratch = np.empty(4), np.empty(3, dtype=np.int64), np.empty(3)
+    scratch = np.empty(3), np.empty(4), np.empty(4), np.empty(3, dtype=np.int64), np.empty(3)
 
     def value(dx, dy):
         slopes = np.array([1.0 / dx, 1.0 / dy, 0.0])
