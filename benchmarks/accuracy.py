@@ -154,7 +154,7 @@ is `docs/figures/accuracy_convergence.png`.
    without it are blended by a smoothstep that falls to 0 at the neighbouring node. A crossing
    lives on a cut edge, and the edge stops being cut when the crossing reaches its far node
    (that node changes sides): at full slope the plane through it still cut the cell's corners
-   there (6 % of a Tricept cell) and lost them in one step (8e-6 of eta along a Tricept
+   there (6 % of a Tricept cell) and lost them in one step (3e-5 of eta along a Tricept
    optimum's line). A blend of cuts rather than a fading slope: a plane of slope near 0 loses
    `eps / slope` of a cell to the inclusion-exclusion's cancellation. Within 1e-4 of a cell
    of a node, all its plane's slopes are scaled down together (at most 1e4), so that the
@@ -227,11 +227,11 @@ optimum (H4: h4_mixed's best known; Tricept: a max-volume optimum; 3-RPR: rpr3_m
 known; 2-RPR: the trade-off's w_d = 0.5 optimum; the Delta, which has none documented: the
 middle of its design box) along **every** design variable, in steps of 0.05 % of its range
 (shifted to stay within its bounds): no change between neighbours exceeds twice the median
-change (+1e-5 eta); the old count fails the same test for Tricept, Delta and 3-RPR along one
-variable each (along H4's line its changes are all irregular, median 15 ppm of eta, so that none
-stands out: a strict xfail). The objective of the previous version failed it for H4 (a spike of
-1.3e-5 of eta at the h4_mixed best known, where a crossing's look fell just outside, step 3c)
-and for the Tricept along b (8e-6 of eta, a corner cut lost in one step, step 4). Along the old
+change (+1e-5 eta); the old count fails the same test for H4, Tricept, Delta and 3-RPR along
+one variable each (along H4's line through the regenerated best known it steps by 32 ppm of eta
+against a median of 4; through the earlier one its changes were all irregular). The objective of the previous version failed it for H4 (a spike of
+2e-5 of eta at the h4_mixed best known, where a crossing's look fell just outside, step 3c)
+and for the Tricept along b (3e-5 of eta, a corner cut lost in one step, step 4). Along the old
 h4_mixed best known's line the largest change between neighbours is now 2.3x the median (it was
 246x); `test_no_spike_where_a_crossing_s_look_falls_just_outside` walks it at a tenth of the
 step. **One step remains** (a strict xfail, `tricept-b`): 0.4 % of b above its lower bound a

@@ -352,7 +352,7 @@ def test_no_spike_where_a_crossing_s_look_falls_just_outside():
 
 
 #: measured misses of the continuity test, strict: they fail today. The step at H4's h4_mixed best
-#: known (a spike of 1.3e-5 of eta where a crossing's look fell just outside the reach boundary)
+#: known (a spike of 2e-5 of eta where a crossing's look fell just outside the reach boundary)
 #: and those of 1e-6 from the occupied box, the crossings' models and the planes' corner cuts are
 #: gone (kinematics.workspace); one remains, in a slab thinner than a cell (docs/accuracy.md)
 STEP_MISSES: dict[tuple[str, str], str] = {
