@@ -2,22 +2,26 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
+from fractions import Fraction
 
 import numpy as np
 import pytest
 
 from benchmarks.accuracy import OPTIMA, best_known_design, optimum
-from kinematics import MECHANISMS, get_mechanism
+from kinematics import MECHANISMS, get_mechanism, kernels
 from kinematics.annuli import planar_legs_signed_inverse_condition
 from kinematics.workspace import (
     FADE_FROM,
     SECTION_NODES,
     SECTIONS,
+    _crossings,
     _cube_fraction,
     _faded_cube_fraction,
     _faded_plane_cut,
     _multisect,
+    _plane_cut,
     default_resolution,
     evaluate,
 )
@@ -79,16 +83,105 @@ def test_a_faded_crossing_leaves_the_cut_as_it_reaches_the_far_node():
     assert min(full, left_out) + 1e-3 < faded < max(full, left_out) - 1e-3
 
 
+def _exact_cut(c: list[float]) -> Fraction:
+    """The fraction of :func:`_cube_fraction` in exact rational arithmetic (inclusion-exclusion
+    over the corners, slopes > 0): the reference for the float paths' cancellation."""
+    c = [Fraction(x) for x in c]
+    bound = 1 + sum(c) / 2
+    total = Fraction(0)
+    for corner in range(1 << len(c)):
+        level = bound - sum(x for j, x in enumerate(c) if (corner >> j) & 1)
+        if level > 0:
+            total += (-1) ** bin(corner).count("1") * level ** len(c)
+    return total / (math.factorial(len(c)) * math.prod(c))
+
+
+@pytest.mark.parametrize(
+    "slopes",
+    [[1e4, 1e-3], [1e4, 2e-3, 3e-3], [1e4, 0.8, 0.5], [1e4, 1e-2, 1e-2, 1e-2], [2.5, 0.3], [3.0, 0.5, 0.4]],
+)
+def test_a_plane_scaled_down_next_to_a_node_is_cut_without_cancellation(slopes):
+    """Planes of a node within 1e-4 of the boundary, scaled down together (1e4 and small slopes):
+    the inclusion-exclusion lost up to 1e-3 of a cell there (0.5 in 4-D); both paths now agree
+    with exact arithmetic."""
+    c = np.array([slopes])
+    exact = float(_exact_cut(slopes))
+    assert _cube_fraction(c)[0][0] == pytest.approx(exact, abs=1e-14)
+    out = np.empty(len(slopes) + 1)
+    _plane_cut(c[0], out, np.empty(len(slopes), dtype=np.int64), np.empty(len(slopes)))
+    assert out[0] == pytest.approx(exact, abs=1e-14)
+    np.testing.assert_allclose(out[1:], _cube_fraction(c)[1][0], atol=1e-15)
+
+
 @pytest.mark.parametrize("seed", range(3))
 def test_the_compiled_faded_cut_matches_the_numpy_one(seed):
     rng = np.random.default_rng(seed)
-    slopes = rng.choice([0.0, 1.0, 1.2, 1.6, 1.9, 2.5, 8.0], size=(300, 3)) * rng.uniform(1.0, 1.05, (300, 3))
+    values = [0.0, 1.0, 1.2, 1.6, 1.9, 2.5, 8.0, 3e4, 1e6, 1e60]  # up to a node's: scaled down together
+    slopes = rng.choice(values, size=(300, 3)) * rng.uniform(1.0, 1.05, (300, 3))
     fraction, centroid = _faded_cube_fraction(slopes)
     cut = np.empty(4)
     for c, f, g in zip(slopes, fraction, centroid):
         _faded_plane_cut(c, np.empty(3), cut, np.empty(4), np.empty(3, dtype=np.int64), np.empty(3))
         assert cut[0] == pytest.approx(f, abs=1e-14)
         np.testing.assert_allclose(cut[1:], g, atol=1e-14)
+
+
+class _OneEdge:
+    """Point values on the edge x in [0, 1] (column 0 of poses (N, 2)) for :func:`_crossings`:
+    one reach margin ``reach(x)``, reachable where it is >= 0 (``reachable_to`` further caps
+    that without a margin of its own), ``1/kappa = sqrt(limit^2 + dexterity(x))``, weight 1."""
+
+    min_ic = 0.2
+
+    def __init__(self, reach, dexterity, reachable_to=np.inf):
+        self.reach, self.dexterity, self.reachable_to = reach, dexterity, reachable_to
+
+    def margins(self, poses):
+        return self.reach(poses[:, 0])[:, None]
+
+    def __call__(self, poses, oriented=False, keep_extent=False):
+        x = poses[:, 0]
+        with np.errstate(invalid="ignore"):
+            ic = np.where(
+                (self.reach(x) >= 0) & (x <= self.reachable_to), np.sqrt(self.min_ic**2 + self.dexterity(x)), np.nan
+            )
+        return ic > self.min_ic, np.ones(x.size), ic, None
+
+
+def _edge_crossing(values) -> float:
+    """The crossing :func:`_crossings` places on the edge from 0 (inside) to 1 (unreachable)."""
+    probe = np.zeros((1, 2))
+    start = np.array([[1.0], [values(probe.copy())[2][0]]])
+    crossing, _ = _crossings(
+        values, probe, np.array([0]), np.array([0.0]), np.array([1.0]), start, None, np.array([np.nan])
+    )
+    return float(crossing[0])
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_the_dexterity_parabola_finds_a_root_beyond_the_first_look(compiled):
+    """The dexterity margin first, unknown at the unreachable outside end: its line's root lies
+    beyond the first look where the margin is still positive there; the parabola's edge then
+    ends at that root's look. It kept the line's root, and jumped to the look as the parabola's
+    root crossed it (0.625 to 0.5 for a true root of 0.559)."""
+    context = contextlib.nullcontext() if compiled else kernels.reference_kernels()
+    with context:
+        for k in (3.1999, 3.2001):
+            a = (0.8 - 0.25 * k) / 0.5
+            values = _OneEdge(lambda x: 0.5 - x * x, lambda x, a=a, k=k: 0.01 * (1 - a * x - k * x * x))
+            root = max(np.roots([-k, -a, 1]))
+            assert _edge_crossing(values) == pytest.approx(root, abs=2e-3)
+
+
+def test_the_second_look_s_dexterity_root_moves_through_the_look():
+    """The first look unreachable, the second look short of the crossing: the dexterity limit's
+    root on the line through the inside end and the look moves continuously as the margin at the
+    look changes sign (it jumped to the reach crossing, 0.45 to 0.6)."""
+    crossings = []
+    for zero in (0.4499, 0.4501):
+        values = _OneEdge(lambda x: 0.6 - x, lambda x, z=zero: 0.01 * (1 - x / z), reachable_to=0.48)
+        crossings.append(_edge_crossing(values))
+    assert crossings == pytest.approx([0.4499, 0.4501], abs=1e-4)
 
 
 def test_a_node_next_to_the_boundary_keeps_its_plane_s_direction():
