@@ -1267,7 +1267,7 @@ def _faded_cube_fraction(slopes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     Why: a crossing lives on a cut edge, and the edge stops being cut when the crossing reaches
     its far end (that node changes sides). At its full slope the plane through it still cut
     the cell's corners there (6 % of a Tricept cell) and lost them in one step as the crossing
-    vanished: a step of 8e-6 of eta along a Tricept optimum's line. Beyond half a cell the
+    vanished: a step of 3e-5 of eta along a Tricept optimum's line. Beyond half a cell the
     crossing lies outside the cell and only tilts the plane. Why a blend of cuts rather than a
     fading slope: a plane of slope near 0 costs the cut's inclusion-exclusion ``eps / slope``
     of a cell to cancellation; each cut here has slopes 0 or at least 1 (at least
