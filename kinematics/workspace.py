@@ -350,14 +350,15 @@ def default_resolution(
     """
     if orientation is None:
         orientation = mechanism.default_orientation
-    n_axes = len(sampled_axes(mechanism, orientation, fixed))
+    names = sampled_axes(mechanism, orientation, fixed)
+    n_axes = len(names)
     budget = mechanism.grid_nodes if method == "grid" else None
     nodes = int(mechanism.default_nodes if budget is None else budget)
     if not n_axes:  # one node whatever the resolution: the budget itself, as a 1-axis grid's
         return nodes
     # from above (nodes are rounded up per axis): the budget over the product of the per-axis
     # factors, then down to the largest fit
-    factors = [mechanism.grid_axis_nodes.get(name, 1.0) for name in sampled_axes(mechanism, orientation, fixed)]
+    factors = [mechanism.grid_axis_nodes.get(name, 1.0) for name in names]
     shrink = math.prod(factors) if method == "grid" else 1.0
     res = int(math.ceil((nodes / shrink) ** (1.0 / n_axes))) + 1
     while res > 1 and grid_nodes(mechanism, res, orientation, fixed, method) > nodes:
@@ -546,16 +547,18 @@ def _crossings(
         dex_1 = _dexterity_margin(ic_1, limit)
         t2, which = refined(reach, np.ascontiguousarray(reach_1), dex_in, dex_1, dex_out, look, t1)
         if start.shape[0]:
+
+            def edge(rows: np.ndarray) -> tuple[np.ndarray, ...]:
+                """The looks' poses (a copy), columns and ends of these rows of ``look``."""
+                return at[rows], column[look[rows]], p_in[look[rows]], p_out[look[rows]]
+
             # the look whose margins the crossing's model used: t1, or the second look's point
             t_look = t1.copy()
             again = np.nonzero(~np.isfinite(ic_1) & (which >= 0))[0]
             if again.size:
                 t2[again], which[again], weight_1[again], ic_1[again], t_look[again] = _second_look(
                     values,
-                    at[again],
-                    column[look[again]],
-                    p_in[look[again]],
-                    p_out[look[again]],
+                    *edge(again),
                     t2[again],
                     which[again],
                     start[0, look[again]],
@@ -570,10 +573,7 @@ def _crossings(
                 t2[curved], weight_1[curved] = _dexterity_parabola(
                     values,
                     refined,
-                    at[curved],
-                    column[look[curved]],
-                    p_in[look[curved]],
-                    p_out[look[curved]],
+                    *edge(curved),
                     t_look[curved],
                     t2[curved],
                     dex_in[look[curved]],
