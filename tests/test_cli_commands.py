@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import pandas as pd
@@ -137,3 +138,21 @@ def test_help_lists_the_experiments_of_plug_in_packages(tmp_path, monkeypatch, c
     line = next(ln for ln in text.splitlines() if ln.strip().startswith("five_bar_mixed "))
     assert "five-bar" in line  # its own summary line, read from the package
     assert any(ln.strip().startswith("h4_mixed ") for ln in text.splitlines())
+
+
+def test_read_dataset_says_so_when_its_purposes_leave_no_row(tmp_path):
+    """A dataset of ``+debug`` runs only read with the default purposes: an empty frame, and one
+    warning naming the purposes left out and how to keep them (an empty frame alone reads as
+    "nothing ran")."""
+    (tmp_path / "best").mkdir()
+    pd.DataFrame({"run_id": ["a", "b"], "purpose": ["debug", "debug"], "eta": [0.1, 0.2]}).to_parquet(
+        tmp_path / "best" / "a.parquet"
+    )
+    with pytest.warns(
+        UserWarning, match=r"all 2 rows of best are debug runs, left out by purposes=\('study', 'benchmark'\)"
+    ):
+        assert read_dataset(tmp_path).empty
+    assert len(read_dataset(tmp_path, purposes=None)) == 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # rows kept: no warning
+        assert len(read_dataset(tmp_path, purposes=("debug",))) == 2

@@ -84,7 +84,8 @@ def test_report_table_units_gaps_captions_and_seeds(sweep):
 @pytest.mark.slow  # the fixture: three tiny runs with figures (~40 s on 2 busy cores)
 def test_dataset_report_leaves_debug_runs_out_unless_there_is_nothing_else(sweep):
     dataset = sweep.parents[1] / "dataset"
-    assert read_dataset(dataset).empty  # all three are +debug=fast runs
+    with pytest.warns(UserWarning, match=r"all 3 rows of best are debug runs, .*purposes=None keeps them"):
+        assert read_dataset(dataset).empty  # all three are +debug=fast runs
     everything = read_dataset(dataset, purposes=None)
     assert len(everything) == 3 and set(everything["purpose"]) == {"debug"}
     assert "debug runs only" in build_report(dataset)

@@ -26,6 +26,7 @@ import os
 import sys
 import tempfile
 import time
+import warnings
 from pathlib import Path
 from urllib.parse import quote
 
@@ -61,7 +62,9 @@ def load_sweep(source: Path) -> tuple[pd.DataFrame, pd.DataFrame, dict[str, Path
     source = Path(source)
     if is_dataset(source):
         purposes = DEFAULT_PURPOSES
-        best = read_dataset(source, "best", purposes)
+        with warnings.catch_warnings():  # an empty frame's warning: the report says so itself
+            warnings.simplefilter("ignore", UserWarning)
+            best = read_dataset(source, "best", purposes)
         note = ""
         if best.empty:  # nothing but quick looks: show them rather than nothing, and say so
             purposes, note = None, "; debug runs only"

@@ -11,6 +11,7 @@ unless asked, so quick looks never mix into a study's numbers.
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import pandas as pd
@@ -37,7 +38,8 @@ def read_dataset(
         ``best`` (one row per run), ``history``, ``designs``, ``front`` or ``runs``.
     purposes : tuple of str or None
         Runs kept by their ``purpose`` column (default: studies and benchmarks, no
-        debug runs); None keeps every run.
+        debug runs); None keeps every run. A :class:`UserWarning` says so where this
+        leaves no row of a table that has rows (a dataset of ``+debug`` runs only).
 
     Raises
     ------
@@ -56,7 +58,17 @@ def read_dataset(
     arrow = pq.read_table(folder)
     df = arrow.to_pandas()
     if purposes is not None and "purpose" in df.columns:
-        df = df[df["purpose"].astype(str).isin(purposes)].reset_index(drop=True)
+        every = len(df)
+        kept = df["purpose"].astype(str).isin(purposes)
+        df = df[kept].reset_index(drop=True)
+        if every and df.empty:  # an empty frame alone reads as "nothing ran"
+            left_out = ", ".join(sorted(set(arrow.column("purpose").to_pylist()) - set(purposes)))
+            warnings.warn(
+                f"read_dataset: all {every} rows of {table} are {left_out} runs, left out by "
+                f"purposes={tuple(purposes)}; purposes=None keeps them",
+                UserWarning,
+                stacklevel=2,
+            )
     schema = pq.read_schema(files[0])
     df.attrs["units"] = {f.name: (f.metadata or {}).get(b"unit", b"").decode() for f in schema}
     df.attrs["descriptions"] = {f.name: (f.metadata or {}).get(b"description", b"").decode() for f in schema}
