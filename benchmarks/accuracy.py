@@ -211,8 +211,15 @@ crossing, its face normal to the axis). On the scan below it took the worst V fr
 from -0.049 % to -0.145 % against 4x (a random one from -0.053 % to -0.124 %): there the
 slabs' over-count had offset an under-count of about 0.15 % elsewhere, not yet located, and
 the exact part beyond the farther crossing under the cell's plane (Monte Carlo, 2e4 points a
-cell) gives -0.133 %, so the strip's shape is not the cause. Both are cells that hold two
-boundaries, which the cell rule above would treat together. The
+cell) gives -0.133 %, so the strip's shape is not the cause. Where the error lives, cell by
+cell against 400 random points in each (`python -m benchmarks.cell_errors delta "scan 0"`; Delta
+scan designs 0 and 3, the Gough-Stewart's paper design): cells cut along one axis only, whose plane is
+normal to that axis, over-count at inside nodes (+0.11 to +0.15 % of V) and under-count at
+outside ones (-0.11 to -0.20 %), a tilted boundary leaving the cell through a face that plane
+does not see, netting -0.09 to +0.03 %; the slabs +0.05 to +0.12 %; outside nodes none of
+whose edges is cut but whose cell's corner lies inside -0.04 to -0.07 %. Each is a boundary
+the cell's own crossings do not describe; a rule that also takes the tilt from the
+neighbouring nodes' crossings (or the margins' values at the cell's corners) is the next step. The
 planar mechanisms' sections converge like h^1.5 across (y, phi) (where a section shrinks to
 nothing, its length falls like a square root), irregularly (the 2-RPR's reachable sections
 against `RPR2.exact_area` on its paper design: +0.045 %, -0.020 %, +0.026 % at 200, 400, 800,
