@@ -173,3 +173,23 @@ def test_the_reference_s_evaluation_estimate_bounds_what_it_spends(n_var):
     )
     spent = best_known(problem).n_evaluations
     assert 0.5 * expected_evaluations(n_var) <= spent <= expected_evaluations(n_var)
+
+
+def test_the_run_s_log_names_its_objective_s_unit(caplog):
+    """The optimiser's progress lines give bare numbers; the run's first line says their unit
+    (a volume's, at the run's orientation range), and the best row's ``objective_unit`` is the
+    same. Dimensionless objectives say nothing."""
+    import logging
+
+    from pipeline.stages.optimise import objective_unit
+
+    mech = MechanismConfig(name="tricept")
+    assert objective_unit(mech, "volume") == "mm·rad²" and objective_unit(mech, "mixed") == "1"
+    assert objective_unit(MechanismConfig(name="h4"), "volume") == "cm³·rad"
+    ga = GAConfig(population=4, generations=1, reference=False)
+    with caplog.at_level(logging.INFO, logger="pipeline.stages.optimise"):
+        out = optimise_design(mech, 6, "grid", 2, ObjectiveConfig("volume", 0.0), ga)
+        optimise_design(MechanismConfig(name="rpr3"), 6, "grid", 2, ObjectiveConfig("mixed", 0.5), ga)
+    lines = [r.getMessage() for r in caplog.records if r.getMessage().startswith("optimise: ")]
+    assert "objective volume in mm·rad² (w_d 0)" in lines[0] and "objective mixed (w_d 0.5)" in lines[1]
+    assert out["best"]["objective_unit"] == "mm·rad²"

@@ -110,10 +110,11 @@ def optimise_design(
     scalar = Problem(lambda x: objective_values(objective.name, rows(x), objective.w_d), lower, upper)
     algorithm = OPTIMIZERS[optimizer.name](optimizer)
     log.info(
-        "optimise: %s on %s, objective %s (w_d %.3g), about %d evaluations",
+        "optimise: %s on %s, objective %s%s (w_d %.3g), about %d evaluations",
         optimizer.name,
         mechanism.name,
         objective.name,
+        _in_unit(objective_unit(mechanism, objective.name)),
         objective.w_d,
         algorithm.expected_evaluations(),
     )
@@ -206,7 +207,13 @@ def reference_stage(
     )
     found = best_known(problem)
     refined = _refined_value(mechanism, resolution, method, refine_factor, objective, found.x)
-    log.info("reference: %.6g by %s, %d evaluations", found.fun, found.summary(), found.n_evaluations)
+    log.info(
+        "reference: %.6g%s by %s, %d evaluations",
+        found.fun,
+        _in_unit(objective_unit(mechanism, objective.name), " "),
+        found.summary(),
+        found.n_evaluations,
+    )
     return {
         "value": float(found.fun),
         "x": [float(v) for v in found.x],
@@ -215,6 +222,21 @@ def reference_stage(
         "value_refined": refined,
         "error": abs(refined - float(found.fun)),
     }
+
+
+def objective_unit(mechanism: MechanismConfig, objective: str) -> str:
+    """Unit of objective ``objective`` (a name of :data:`~pipeline.objectives.OBJECTIVES`) of
+    ``mechanism``: its volume unit over the run's orientation range for ``volume`` (e.g.
+    ``"cm³·rad"``), else the objective's own (``"1"``: dimensionless)."""
+    unit = OBJECTIVES[objective].unit
+    if unit != "volume":
+        return unit
+    return mechanism.build(mechanism.centre).volume_unit(mechanism.orientation_rad())
+
+
+def _in_unit(unit: str, separator: str = " in ") -> str:
+    """``unit`` for a log line after a value or a name ("" when dimensionless)."""
+    return "" if unit == "1" else f"{separator}{unit}"
 
 
 def within_error(gap: float, gap_error: float) -> bool:
@@ -348,6 +370,5 @@ def _best_row(
     best["resolution"] = int(res)
     best["method"] = str(method)
     best["volume_unit"] = mech.volume_unit(mechanism.orientation_rad())
-    unit = OBJECTIVES[objective.name].unit
-    best["objective_unit"] = best["volume_unit"] if unit == "volume" else unit
+    best["objective_unit"] = objective_unit(mechanism, objective.name)
     return best
