@@ -16,7 +16,8 @@ each cell), summed per kind of cell and given in % of V:
 Their sum is the method's error against its own Monte Carlo (with the MC's standard error), to
 compare with the error against a 4x finer grid (``benchmarks.accuracy``). A diagnosis, not a
 target: it says which cells the next cell rule must treat. Mechanisms with an exact axis (H4)
-are not supported (a cell's fraction there is a length, not a membership). Seeded (seed 1).
+are not supported (a cell's fraction there is a length, not a membership), nor those integrated
+by exact sections (the 2-RPR, the 3-RPR). Seeded (seed 1).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ import numpy as np
 from scipy.ndimage import maximum_filter, minimum_filter
 
 from benchmarks.accuracy import SCAN, SCAN_SEED, designs, random_designs
-from kinematics import kernels
+from kinematics import MECHANISMS, kernels
 from kinematics import workspace as ws
 
 #: cells per call of the membership test
@@ -38,7 +39,8 @@ def _captured_cut_cells(mech) -> dict:
     """Run ``evaluate(mech)`` on the numpy path and keep what its cut cells were made of: the
     grid (``values``, ``axes``, ``box``, ``sampled``, ``inside``), the crossings per axis
     (:func:`kinematics.workspace._edge_crossings`) and the cut cells' node-side fractions
-    (:func:`kinematics.workspace._faded_cube_fraction`), by wrapping those functions."""
+    (:func:`kinematics.workspace._faded_cube_fraction`), and V in cells (the corrected sums), by
+    wrapping those functions."""
     seen: dict = {}
     wrapped = {
         name: getattr(ws, name) for name in ("_boundary_corrected_sums", "_edge_crossings", "_faded_cube_fraction")
@@ -46,7 +48,8 @@ def _captured_cut_cells(mech) -> dict:
 
     def sums(values, axes, box, resolution, sampled, inside, *rest):
         seen.update(values=values, axes=axes, box=box, sampled=sampled, inside=inside)
-        return wrapped["_boundary_corrected_sums"](values, axes, box, resolution, sampled, inside, *rest)
+        seen["sums"] = wrapped["_boundary_corrected_sums"](values, axes, box, resolution, sampled, inside, *rest)
+        return seen["sums"]
 
     def crossings(*args, **kwargs):
         seen["crossings"] = wrapped["_edge_crossings"](*args, **kwargs)
@@ -87,6 +90,8 @@ def breakdown(mech, points: int = 400, seed: int = 1) -> list[tuple[str, int, fl
     """Rows ``(kind of cell, cells, sum of (rule - Monte Carlo) in % of V)``, the last row
     the total with the Monte Carlo's standard error in its label."""
     seen = _captured_cut_cells(mech)
+    if "inside" not in seen:
+        raise SystemExit(f"{mech.name}: integrated by exact sections, no grid cells; not supported")
     inside, sampled = seen["inside"], seen["sampled"]
     if seen["values"].exact is not None:
         raise SystemExit(f"{mech.name}: an exact axis (cell fractions are lengths there); not supported")
@@ -108,7 +113,7 @@ def breakdown(mech, points: int = 400, seed: int = 1) -> list[tuple[str, int, fl
     uncut_in = inside.ravel()[uncut]
     uncut_fraction = _monte_carlo_fractions(seen, uncut, points, rng)
     uncut_diff = uncut_in - uncut_fraction
-    cells = float(inside.sum())  # V in cells (weight 1 per inside node)
+    cells = float(seen["sums"][0])  # V in cells: the corrected sum of the weights (1 a node here)
     rows = []
     kinds = [("slab thinner than the cell", slab)] + [
         (f"cut along {k} " + ("axis" if k == 1 else "axes"), ~slab & (axes_cut == k))
@@ -140,6 +145,10 @@ def main() -> None:
     parser.add_argument("design", help='"paper", "optimum k", "random k" or "scan k" (benchmarks.accuracy)')
     parser.add_argument("--points", type=int, default=400)
     args = parser.parse_args()
+    if args.mechanism not in MECHANISMS:
+        parser.error(f"mechanism={args.mechanism!r} is invalid: allowed {', '.join(sorted(MECHANISMS))}")
+    if args.points < 1:
+        parser.error(f"--points={args.points} is invalid: allowed an integer >= 1")
     pool = dict(designs(args.mechanism)) | dict(random_designs(args.mechanism, SCAN_SEED, SCAN, "scan"))
     if args.design not in pool:
         parser.error(f"design={args.design!r} is invalid: allowed {', '.join(pool)}")
