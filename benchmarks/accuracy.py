@@ -220,7 +220,7 @@ does not see, netting -0.09 to +0.03 %; the slabs +0.05 to +0.12 %; outside node
 whose edges is cut but whose cell's corner lies inside -0.04 to -0.07 %. Each is a boundary
 the cell's own crossings do not describe; a rule that also takes the tilt from the
 neighbouring nodes' crossings (or the margins' values at the cell's corners) is the next step.
-Measured after the fact on the same four designs (not in the code): tilting each cell's plane
+Measured after the fact on these designs and Tricept scan 5 (not in the code): tilting each plane
 along every axis without a crossing by the difference of its neighbours' crossings along its main
 axis (a height function) cuts the one-axis cells' mean error per cell 2-2.5x and their net
 error from +0.05 to +0.15 % (inside nodes) and -0.03 to -0.20 % (outside) to within 0.06 %, and
