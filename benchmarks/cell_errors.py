@@ -39,15 +39,17 @@ def _captured_cut_cells(mech) -> dict:
     """Run ``evaluate(mech)`` on the numpy path and keep what its cut cells were made of: the
     grid (``values``, ``axes``, ``box``, ``sampled``, ``inside``), the crossings per axis
     (:func:`kinematics.workspace._edge_crossings`) and the cut cells' node-side fractions
-    (:func:`kinematics.workspace._faded_cube_fraction`), and V in cells (the corrected sums), by
-    wrapping those functions."""
+    (:func:`kinematics.workspace._faded_cube_fraction`), the cell widths, and V in cells (the
+    corrected sums), by wrapping those functions."""
     seen: dict = {}
     wrapped = {
         name: getattr(ws, name) for name in ("_boundary_corrected_sums", "_edge_crossings", "_faded_cube_fraction")
     }
 
     def sums(values, axes, box, resolution, sampled, inside, *rest):
-        seen.update(values=values, axes=axes, box=box, sampled=sampled, inside=inside)
+        # each sampled axis's cell width, as the grid's: the box over its nodes
+        widths = [(float(box[1][j]) - float(box[0][j])) / len(axes[j]) for j in sampled]
+        seen.update(values=values, axes=axes, box=box, sampled=sampled, inside=inside, widths=widths)
         seen["sums"] = wrapped["_boundary_corrected_sums"](values, axes, box, resolution, sampled, inside, *rest)
         return seen["sums"]
 
@@ -73,10 +75,9 @@ def _captured_cut_cells(mech) -> dict:
 def _monte_carlo_fractions(seen: dict, nodes: np.ndarray, points: int, rng: np.random.Generator) -> np.ndarray:
     """Fraction (M,) of the cells of ``nodes`` (flat indices) inside the workspace, from
     ``points`` uniform random points each."""
-    axes, box, sampled, inside = seen["axes"], seen["box"], seen["sampled"], seen["inside"]
+    axes, sampled, inside, widths = seen["axes"], seen["sampled"], seen["inside"], seen["widths"]
     index = np.unravel_index(nodes, inside.shape)
     centres = np.column_stack([axes[j][index[j]] for j in range(inside.ndim)])
-    widths = [(float(box[1][j]) - float(box[0][j])) / len(axes[j]) for j in sampled]
     out = np.empty(nodes.size)
     for start in range(0, nodes.size, BATCH):
         poses = np.repeat(centres[start : start + BATCH], points, axis=0)
@@ -95,9 +96,9 @@ def breakdown(mech, points: int = 400, seed: int = 1) -> list[tuple[str, int, fl
     inside, sampled = seen["inside"], seen["sampled"]
     if seen["values"].exact is not None:
         raise SystemExit(f"{mech.name}: an exact axis (cell fractions are lengths there); not supported")
-    widths = [(float(seen["box"][1][j]) - float(seen["box"][0][j])) / len(seen["axes"][j]) for j in sampled]
-    near = np.stack([np.minimum(minus, plus) / w for (minus, plus, _, _), w in zip(seen["crossings"], widths)])
-    far = np.stack([np.maximum(minus, plus) / w for (minus, plus, _, _), w in zip(seen["crossings"], widths)])
+    pairs = list(zip(seen["crossings"], seen["widths"]))
+    near = np.stack([np.minimum(minus, plus) / w for (minus, plus, _, _), w in pairs])
+    far = np.stack([np.maximum(minus, plus) / w for (minus, plus, _, _), w in pairs])
     # the cut cells, in the order _boundary_corrected_sums takes them
     cut = np.nonzero(np.isfinite(near.reshape(len(sampled), -1)).any(axis=0))[0]
     is_in = inside.ravel()[cut]

@@ -58,13 +58,12 @@ def read_dataset(
     arrow = pq.read_table(folder)
     df = arrow.to_pandas()
     if purposes is not None and "purpose" in df.columns:
-        every = len(df)
-        kept = df["purpose"].astype(str).isin(purposes)
-        df = df[kept].reset_index(drop=True)
-        if every and df.empty:  # an empty frame alone reads as "nothing ran"
-            left_out = ", ".join(sorted(set(arrow.column("purpose").to_pylist()) - set(purposes)))
+        purpose = df["purpose"].astype(str)
+        df = df[purpose.isin(purposes)].reset_index(drop=True)
+        if len(purpose) and df.empty:  # an empty frame alone reads as "nothing ran"
+            left_out = ", ".join(sorted(set(purpose) - set(purposes)))
             warnings.warn(
-                f"read_dataset: all {every} rows of {table} are {left_out} runs, left out by "
+                f"read_dataset: all {len(purpose)} rows of {table} are {left_out} runs, left out by "
                 f"purposes={tuple(purposes)}; purposes=None keeps them",
                 UserWarning,
                 stacklevel=2,
