@@ -356,3 +356,82 @@ def annuli_x_sections(ys, centres_x, centres_y, arms_x, arms_y, rho_min, rho_max
                 k += 1
         measure[p], integral[p] = total, weighted
     return measure, reach, integral, ic_min, ic_max, evaluated
+
+
+@kernels.inline_jit
+def _in_every_annulus(x, y, centres_x, centres_y, layer, rho_min, rho_max, slack):
+    """Whether ``(x, y)`` (mm) lies in every annulus of row ``layer``, within ``slack`` (mm)."""
+    for i in range(centres_x.shape[1]):
+        distance = math.hypot(x - centres_x[layer, i], y - centres_y[layer, i])
+        if distance < rho_min - slack or distance > rho_max + slack:
+            return False
+    return True
+
+
+@kernels.jit
+def annuli_y_extent(centres_x, centres_y, rho_min, rho_max):
+    """Exact extent along y of intersections of annuli, one intersection per row.
+
+    Row p is the set of points within ``rho_min..rho_max`` of every centre
+    ``(centres_x[p, i], centres_y[p, i])`` (a planar RPR leg per annulus: seed 003 eq. 12-14,
+    seed 004 eq. 1-2). Its lowest point, where it is not empty, lies on its boundary, which is
+    made of arcs of the annuli's circles: it is the bottom of an outer circle, the top of an
+    inner one (the set lies outside it), or a point where two circles of different annuli
+    meet. So are the highest point's candidates, mirrored (all four extremes of both circles
+    of each annulus are tried: a superset). Every such candidate that lies in
+    every annulus (within ``1e-9 rho_max``, the rounding of a point computed on two circles)
+    counts, and the extremes of their y are the extent. Continuous in the centres, except where
+    a part of the set shrinks to a point and vanishes (its area goes to 0 there).
+
+    Parameters
+    ----------
+    centres_x, centres_y : ndarray, shape (N, m)
+        Annulus centres per row (mm).
+    rho_min, rho_max : float
+        Inner and outer radius of every annulus (mm), ``0 <= rho_min < rho_max``.
+
+    Returns
+    -------
+    lower, upper : ndarray, shape (N,)
+        The least and greatest y of each row's intersection (mm); NaN where it is empty.
+    """
+    count, legs = centres_x.shape
+    lower = np.full(count, np.nan)
+    upper = np.full(count, np.nan)
+    slack = 1e-9 * rho_max
+    for p in range(count):
+        low = np.inf
+        high = -np.inf
+        for i in range(legs):
+            x, y = centres_x[p, i], centres_y[p, i]
+            # the bottom and top of the outer circle, the top and bottom of the inner one
+            for candidate in (y - rho_max, y + rho_max, y + rho_min, y - rho_min):
+                if _in_every_annulus(x, candidate, centres_x, centres_y, p, rho_min, rho_max, slack):
+                    low = min(low, candidate)
+                    high = max(high, candidate)
+        for i in range(legs):
+            for j in range(i + 1, legs):
+                dx = centres_x[p, j] - centres_x[p, i]
+                dy = centres_y[p, j] - centres_y[p, i]
+                distance = math.hypot(dx, dy)
+                if distance == 0.0:  # concentric annuli: their circles do not cross
+                    continue
+                for r_i in (rho_min, rho_max):
+                    for r_j in (rho_min, rho_max):
+                        along = (distance * distance + r_i * r_i - r_j * r_j) / (2.0 * distance)
+                        across_squared = r_i * r_i - along * along
+                        if across_squared < 0.0:
+                            continue
+                        across = math.sqrt(across_squared)
+                        mid_x = centres_x[p, i] + along * dx / distance
+                        mid_y = centres_y[p, i] + along * dy / distance
+                        for sign in (1.0, -1.0):
+                            x = mid_x - sign * across * dy / distance
+                            y = mid_y + sign * across * dx / distance
+                            if _in_every_annulus(x, y, centres_x, centres_y, p, rho_min, rho_max, slack):
+                                low = min(low, y)
+                                high = max(high, y)
+        if low <= high:
+            lower[p] = low
+            upper[p] = high
+    return lower, upper

@@ -358,6 +358,16 @@ class Mechanism(ABC):
         """
         return None
 
+    def transverse_extent(self, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """Optional exact extent of the reachable workspace (no dexterity limit) along the linear
+        pose variable across :meth:`exact_sections` (3-RPR: y), at each orientation ``angles``
+        (L,) (rad): ``(lower, upper)``, each (L,) in the length unit, NaN where nothing is
+        reachable. ``workspace.evaluate(method="grid")`` then spreads each layer's rows over its
+        extent, and its layers over the orientations where the extent is not empty, instead of
+        over the pose box (3-RPR: :meth:`kinematics.rpr3.RPR3.transverse_extent`). ``None`` (the
+        default): not known; the rows span the pose box."""
+        return None
+
     def exact_volume(self, orientation: tuple[float, float]) -> float | None:
         """Optional closed-form volume of the reachable workspace (no dexterity limit) over the
         whole pose box at ``orientation`` (rad), in :meth:`volume_unit`; ``None`` (the default):

@@ -46,7 +46,7 @@ from kinematics.algebra import (
     trig_to_tan_half,
     wrap_angle,
 )
-from kinematics.annuli import annuli_intersection_area, annuli_x_sections
+from kinematics.annuli import annuli_intersection_area, annuli_x_sections, annuli_y_extent
 from kinematics.base import (
     DesignVariable,
     FixedParameter,
@@ -211,6 +211,16 @@ class RPR3(Mechanism):
             float(origin),
             float(step),
             float(min_inverse_condition),
+        )
+
+    def transverse_extent(self, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Exact y extent (mm) of the reachable workspace at each orientation ``angles`` (L,)
+        (rad): the intersection of the legs' annuli around ``c_i = A_i - Rot(phi) B'_i``
+        (eq. 12-14), by :func:`~kinematics.annuli.annuli_y_extent`. Returns ``(lower, upper)``,
+        each (L,) (mm), NaN where the annuli do not meet."""
+        centres = self.base - self._rotated_platform(np.asarray(angles, dtype=float).ravel())  # (L, 3, 2)
+        return annuli_y_extent(
+            np.ascontiguousarray(centres[..., 0]), np.ascontiguousarray(centres[..., 1]), self.rho_min, self.rho_max
         )
 
     @property

@@ -1917,12 +1917,64 @@ def _integrate_grid(
 
 
 # --------------------------------------------------------------- sections
-#: nodes of the (y, phi) rule of :func:`_integrate_sections` per ``resolution``: phi, y, and the
-#: sample spacing along the exact axis as a fraction of the box (anisotropic: docs/accuracy.md).
-#: Why 1.5 x phi: V is exact along x and its error is the (y, phi) rule's, mostly phi's (3-RPR at
-#: its default, 14 designs: worst V 0.113 % with phi at 1x, 0.058 % at 1.5x, 0.089 % with y at 1.25x
-#: instead, for the same number of rows)
+#: nodes of the (y, phi) rule of :func:`_integrate_sections` per ``resolution`` where its rows span
+#: the pose box (2-RPR): phi, y, and the sample spacing along the exact axis as a fraction of the
+#: box (anisotropic: docs/accuracy.md). Why 1.5 x phi: V is exact along x and its error is the
+#: (y, phi) rule's, mostly phi's (3-RPR at its default, 14 designs: worst V 0.113 % with phi at 1x,
+#: 0.058 % at 1.5x, 0.089 % with y at 1.25x instead, for the same number of rows)
 SECTION_NODES = (1.5, 1.5, 0.375)
+#: the same where each layer's rows span its exact extent
+#: (:meth:`~kinematics.base.Mechanism.transverse_extent`, 3-RPR). Why fewer rows and samples: over
+#: the extent every row meets the workspace, and the box's fractions cost 1.5x as many
+#: evaluations of ``1/kappa`` on the paper design; at these, the 3-RPR's worst error over the
+#: ladder and the scan of docs/accuracy.md is 0.05 % (V and GDI) at about the cost of the rule
+#: over the box (measured 2026-11-28: y at 1x gave V 0.15 % on the scan's sliver, x at 0.2x GDI
+#: 0.15 %)
+EXTENT_SECTION_NODES = (1.5, 1.25, 0.25)
+
+
+#: orientations of the scan for the layers' span where the workspace is not reachable at both
+#: ends of the orientation range, per layer of the rule (:func:`_reachable_orientations`)
+ORIENTATION_SCAN = 2
+#: rounds of :func:`_multisect` placing each end of that span (16^4 parts of a scan step)
+ORIENTATION_ROUNDS = 4
+
+
+def _reachable_orientations(
+    mechanism: Mechanism,
+    angle: int,
+    orientation: tuple[float, float],
+    layers: int,
+    ends: tuple[np.ndarray, np.ndarray],
+) -> tuple[float, float] | None:
+    """The span of orientations (rad) where the mechanism's
+    :meth:`~kinematics.base.Mechanism.transverse_extent` is not empty, within ``orientation``
+    (whose extents are ``ends``, each (2,)); ``orientation`` itself where the extent is not
+    empty at both of its ends; None where nothing is reachable at any of
+    ``ORIENTATION_SCAN * layers + 1`` evenly spaced orientations. Otherwise the first and the last
+    reachable orientations of that scan, each moved out to the end of its run by
+    :func:`_multisect` (to ``1 / 16**ORIENTATION_ROUNDS`` of a scan step): the span moves
+    continuously with the design. ``angle`` is the orientation's column in a pose."""
+    if np.all(np.isfinite(ends[0])):
+        return orientation
+    scan = np.linspace(orientation[0], orientation[1], ORIENTATION_SCAN * layers + 1)
+    reachable = np.isfinite(mechanism.transverse_extent(scan)[0])
+    if not reachable.any():
+        return None
+    first, last = int(np.argmax(reachable)), int(scan.size - 1 - np.argmax(reachable[::-1]))
+    # the outer neighbour of each (itself at an end of the range, which is reachable then)
+    p_in, p_out = scan[[first, last]], scan[[max(first - 1, 0), min(last + 1, scan.size - 1)]]
+    span = _multisect(
+        lambda poses: np.isfinite(mechanism.transverse_extent(poses[:, angle])[0]),
+        np.zeros((2, mechanism.dof)),
+        np.array([angle, angle]),
+        p_in,
+        p_out,
+        ORIENTATION_ROUNDS,
+    )
+    lower = float(orientation[0]) if first == 0 else float(span[0])
+    upper = float(orientation[1]) if last == scan.size - 1 else float(span[1])
+    return lower, upper
 
 
 def _integrate_sections(mechanism, resolution, orientation, min_ic, length):
@@ -1931,13 +1983,21 @@ def _integrate_sections(mechanism, resolution, orientation, min_ic, length):
     The section axis is integrated in closed form per row
     (:meth:`~kinematics.base.Mechanism.exact_sections`: exact interval ends, ``1/kappa`` by the
     corrected trapezoid rule on nodes ``step`` apart, the dexterity limit placed by
-    interpolation). The other two axes (3-RPR: y, phi) take the midpoint rule over the pose
-    box, ``SECTION_NODES[1] * resolution`` rows along y per layer and
-    ``SECTION_NODES[0] * resolution`` layers along phi (one at constant orientation); each layer's rows are shifted by the fraction
-    ``{j g}`` of a row (g the golden ratio's conjugate, j the layer), so that a feature at
-    constant y (3-RPR: the annulus of the leg whose platform joint is the pose point does not
-    turn with phi) is not sampled at the same offset in every layer. Continuous in the design:
-    the box, the rows and the sections all move continuously.
+    interpolation). The other two axes (3-RPR: y, phi) take the midpoint rule,
+    ``SECTION_NODES[1] * resolution`` rows along y per layer and
+    ``SECTION_NODES[0] * resolution`` layers along phi (one at constant orientation;
+    :data:`EXTENT_SECTION_NODES` where the rows span the extents, below); each layer's
+    rows are shifted by the fraction ``{j g}`` of a row (g the golden ratio's conjugate, j the
+    layer), so that a feature at constant y (3-RPR: the annulus of the leg whose platform joint
+    is the pose point does not turn with phi) is not sampled at the same offset in every layer.
+    Where the mechanism knows its :meth:`~kinematics.base.Mechanism.transverse_extent` (3-RPR),
+    the layers span the orientations where anything is reachable
+    (:func:`_reachable_orientations`) and each layer's rows span its own exact y extent, each
+    layer weighted by its row width; otherwise the rows and layers span the pose box (2-RPR).
+    Why: a workspace that fills a small part of the box (a 3-RPR sliver of 9e-6 of V*, over a
+    third of the orientations) met one row per layer, 0.56 % of V off; spread over the
+    extent, every layer has its full rows (docs/accuracy.md). Continuous in the design: the
+    span, the extents, the rows and the sections all move continuously.
     """
     section = mechanism.section_axis
     lo, hi = mechanism.pose_bounds(orientation)
@@ -1949,42 +2009,62 @@ def _integrate_sections(mechanism, resolution, orientation, min_ic, length):
     ty = linear[0]
     if not (hi[section] > lo[section] and hi[ty] > lo[ty]):  # an empty box (2-RPR: b > 2 q_max)
         return 0.0, (0.0, 0.0, 0.0), 0, 0, None
-    n_y = max(int(math.ceil(SECTION_NODES[1] * resolution)), 2)
-    hy = (float(hi[ty]) - float(lo[ty])) / n_y
+    ends = mechanism.transverse_extent(np.array(orientation, dtype=float))  # None: not known
+    nodes = SECTION_NODES if ends is None else EXTENT_SECTION_NODES
+    n_y = max(int(math.ceil(nodes[1] * resolution)), 2)
     if angular and orientation[1] > orientation[0]:
-        n_a = max(int(math.ceil(SECTION_NODES[0] * resolution)), 1)  # rounded up, as the rows
-        ha = (orientation[1] - orientation[0]) / n_a
-        layers = orientation[0] + ha * (np.arange(n_a) + 0.5)
+        n_a = max(int(math.ceil(nodes[0] * resolution)), 1)  # rounded up, as the rows
+        span = orientation if ends is None else _reachable_orientations(mechanism, angular[0], orientation, n_a, ends)
+        if span is None:
+            return 0.0, (0.0, 0.0, 0.0), 0, 0, None
+        ha = (span[1] - span[0]) / n_a
+        layers = span[0] + ha * (np.arange(n_a) + 0.5)
     else:
         n_a, ha = 1, 1.0
         layers = np.array([float(orientation[0])])
     shift = (np.arange(n_a) * (math.sqrt(5.0) - 1.0) / 2.0) % 1.0 - 0.5
     rows = (np.arange(n_y) + 0.5)[None, :] + shift[:, None]
-    ys = float(lo[ty]) + hy * (rows % n_y)
-    poses = np.zeros((n_a * n_y, mechanism.dof))
+    extent = mechanism.transverse_extent(layers)
+    if extent is None:  # every layer across the pose box, with one row width
+        hy = (float(hi[ty]) - float(lo[ty])) / n_y
+        ys = float(lo[ty]) + hy * (rows % n_y)
+    else:  # each layer's rows across its extent; the layers where nothing is reachable left out
+        kept = np.isfinite(extent[0]) & np.isfinite(extent[1])
+        layers, rows = layers[kept], rows[kept]
+        hy = (extent[1][kept] - extent[0][kept]) / n_y  # per layer
+        ys = extent[0][kept][:, None] + hy[:, None] * (rows % n_y)
+    poses = np.zeros((ys.size, mechanism.dof))
     poses[:, ty] = ys.ravel()
     if angular:
         poses[:, angular[0]] = np.repeat(layers, n_y)
-    step = (float(hi[section]) - float(lo[section])) / max(SECTION_NODES[2] * resolution, 1.0)
+    step = (float(hi[section]) - float(lo[section])) / max(nodes[2] * resolution, 1.0)
     measure, reach, integral, ic_min, ic_max, evaluated = mechanism.exact_sections(
         poses, float(lo[section]), step, min_ic, length
     )
-    cell = hy * ha
-    volume = float(measure.sum()) * cell
+
+    def weighted(per_row: np.ndarray) -> float:
+        """The sum of ``per_row`` (N,), each row weighted by its layer's row width over ``scale``."""
+        if extent is None:
+            return float(per_row.sum())
+        return float((per_row.reshape(-1, n_y).sum(axis=1) * hy).sum())
+
+    scale = hy * ha if extent is None else ha  # the cell of the product rule, per unit weight
+    dexterous = weighted(measure)
+    volume = dexterous * scale
     inside = measure > 0
     if volume > 0:
         # the GDI as the ratio of two sums on the same rows: their rim errors cancel
-        stats = (float(integral.sum()) * cell / volume, float(ic_min[inside].min()), float(ic_max[inside].max()))
+        stats = (weighted(integral) * scale / volume, float(ic_min[inside].min()), float(ic_max[inside].max()))
     else:
         stats = (0.0, 0.0, 0.0)
     exact = mechanism.exact_volume(orientation)
-    reachable = float(reach.sum())
+    reachable = weighted(reach)
     if exact is not None and reachable > 0:
         # the reachable volume in closed form times the dexterous share of the sections: the error
         # of the rule across the sections where they shrink to nothing (h^1.5, irregular) falls
         # out of V where the dexterity limit cuts the workspace inside (the default's band), and
         # is at most the sections' own elsewhere; 0 where nothing is dexterous
-        volume = float(exact) * float(measure.sum()) / reachable
+        volume = float(exact) * dexterous / reachable
     return volume, stats, int(evaluated), int(inside.sum()), None
 
 
