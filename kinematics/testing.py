@@ -41,6 +41,10 @@ becomes that check's line, ``"<check>: raised <Type>: <message>"``):
     :meth:`~kinematics.base.Mechanism.exact_axis_margins`): one row per pose, all
     ``>= 0`` exactly where the pose (column) is reachable, and the compiled path, if any,
     gives the numpy reference's margins.
+``transverse-extent``
+    Where the class states :meth:`~kinematics.base.Mechanism.transverse_extent` (it has exact
+    sections): one ``(lower, upper)`` pair per orientation, and every reachable pose drawn in
+    the pose box lies within its orientation's extent (none where the extent is empty: NaN).
 ``workspace``
     The centre design's workspace (:func:`kinematics.workspace.evaluate` at
     ``min_resolution``) is not empty, the compiled path, if the class
@@ -80,7 +84,7 @@ ACTS_RTOL = 1e-6
 COMPILED_RTOL = 1e-9
 #: a mechanism's exact sections and the cell grid (two independent integrations of the same
 #: workspace, at the coarsest accepted resolution) must agree in V, GDI and SURI to this (they
-#: agree to 0.18 % (2-RPR) and 0.33 % (3-RPR GDI) on the centre designs)
+#: agree to 0.18 % (2-RPR) and 0.05 % (3-RPR GDI, rows over each layer's extent) on the centre designs)
 SECTIONS_RTOL = 0.005
 
 
@@ -417,6 +421,40 @@ def _check_margins(mech: Mechanism, poses: np.ndarray) -> list[str]:
     return out
 
 
+def _check_transverse_extent(mech: Mechanism, poses: np.ndarray) -> list[str]:
+    """The stated extent along the transverse axis of the sections holds every reachable pose
+    of ``poses`` (N, dof) at its orientation (slack 1e-9 of the extent's size)."""
+    angular = [j for j in range(mech.dof) if mech.angular[j]]
+    angles = poses[:, angular[0]] if angular else np.full(poses.shape[0], float(mech.default_orientation[0]))
+    extent = mech.transverse_extent(angles)
+    if extent is None:
+        return []
+    linear = [j for j in range(mech.dof) if not mech.angular[j] and j != mech.section_axis]
+    if mech.section_axis is None or len(linear) != 1 or len(angular) > 1:
+        return [
+            "transverse-extent: stated without exact sections across one linear axis and at most "
+            f"one angle (section_axis {mech.section_axis!r}, angular {tuple(mech.angular)})"
+        ]
+    lower, upper = (np.asarray(e, dtype=float) for e in extent)
+    if lower.shape != angles.shape or upper.shape != angles.shape:
+        return [
+            f"transverse-extent: expected (lower, upper) of shape {angles.shape} for {angles.size} "
+            f"orientations; got {lower.shape} and {upper.shape}"
+        ]
+    across = poses[:, linear[0]]
+    slack = 1e-9 * (1.0 + np.abs(lower) + np.abs(upper))
+    with np.errstate(invalid="ignore"):
+        within = (across >= lower - slack) & (across <= upper + slack)
+    outside = np.nonzero(_reachable(mech, poses) & ~within)[0]
+    if not outside.size:
+        return []
+    k = outside[0]
+    return [
+        f"transverse-extent: {outside.size} reachable poses lie outside their orientation's extent, e.g. "
+        f"pose {_fmt(poses[k])}: {mech.pose_names[linear[0]]} outside [{lower[k]:.6g}, {upper[k]:.6g}]"
+    ]
+
+
 def _evaluation(mech: Mechanism, resolution: int, cells: bool = False) -> np.ndarray:
     """(V, GDI, SURI) by ``evaluate``; ``cells``: on the cut-cell grid even where the mechanism
     has exact sections (``return_samples`` takes the grid, whose samples are the plot's)."""
@@ -524,6 +562,7 @@ def check_mechanism(
         ("jacobian", lambda: _check_jacobian(mech, reachable)),
         ("pose-bounds", lambda: _check_pose_bounds(mech, rng, 2 * n_poses)),
         ("margins", lambda: _check_margins(mech, box)),
+        ("transverse-extent", lambda: _check_transverse_extent(mech, box)),
     ]
     for name, step in steps:
         try:

@@ -1997,7 +1997,9 @@ def _integrate_sections(mechanism, resolution, orientation, min_ic, length):
     Why: a workspace that fills a small part of the box (a 3-RPR sliver of 9e-6 of V*, over a
     third of the orientations) met one row per layer, 0.56 % of V off; spread over the
     extent, every layer has its full rows (docs/accuracy.md). Continuous in the design: the
-    span, the extents, the rows and the sections all move continuously.
+    span, the extents, the rows and the sections all move continuously (but for the moment a
+    separate part of a layer's workspace shrinks to a point and vanishes: the extent jumps
+    there, and the rows move by up to a row, a step of the size of the rule's error).
     """
     section = mechanism.section_axis
     lo, hi = mechanism.pose_bounds(orientation)
@@ -2043,7 +2045,7 @@ def _integrate_sections(mechanism, resolution, orientation, min_ic, length):
     )
 
     def weighted(per_row: np.ndarray) -> float:
-        """The sum of ``per_row`` (N,), each row weighted by its layer's row width over ``scale``."""
+        """The sum of ``per_row`` (N,) times each row's cell, over their common factor ``scale``."""
         if extent is None:
             return float(per_row.sum())
         return float((per_row.reshape(-1, n_y).sum(axis=1) * hy).sum())

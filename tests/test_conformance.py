@@ -8,6 +8,7 @@ import pytest
 from kinematics import MECHANISMS
 from kinematics.base import DesignVariable
 from kinematics.rpr2 import RPR2
+from kinematics.rpr3 import RPR3
 from kinematics.testing import assert_conforms, check_mechanism
 
 
@@ -187,3 +188,20 @@ def test_not_a_mechanism():
     assert check_mechanism(dict) == ["attributes: <class 'dict'> is not a subclass of kinematics.base.Mechanism"]
     with pytest.raises(ValueError, match="n_poses must be an integer >= 1"):
         check_mechanism(RPR2, n_poses=0)
+
+
+class NarrowExtent(RPR3):
+    name = "broken_extent"
+
+    def transverse_extent(self, angles):
+        lower, upper = super().transverse_extent(angles)
+        return lower, lower + 0.5 * (upper - lower)  # the upper half of each layer cut off
+
+
+def test_an_extent_that_leaves_out_reachable_poses_is_a_failure():
+    """The sections' rows span the stated extent: one that is too narrow loses workspace, and the
+    harness names the extent first (the workspace check then sees the volume it lost)."""
+    failures = check_mechanism(NarrowExtent)
+    assert failures[0].startswith("transverse-extent: ") and "reachable poses lie outside" in failures[0]
+    assert failures[1].startswith("workspace: the exact sections give")
+    assert " y outside [" in failures[0]
