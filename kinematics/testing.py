@@ -70,7 +70,7 @@ import numpy as np
 from kinematics import kernels
 from kinematics.base import DesignVariable, Mechanism
 from kinematics.plugins import one_line as _one_line
-from kinematics.workspace import evaluate
+from kinematics.workspace import evaluate, section_axes
 
 #: relative tolerance of the IK∘FK round trip (pose units)
 ROUND_TRIP_RTOL = 1e-6
@@ -429,19 +429,17 @@ def _check_transverse_extent(mech: Mechanism, poses: np.ndarray) -> list[str]:
     extent = mech.transverse_extent(angles)
     if extent is None:
         return []
-    linear = [j for j in range(mech.dof) if not mech.angular[j] and j != mech.section_axis]
-    if mech.section_axis is None or len(linear) != 1 or len(angular) > 1:
-        return [
-            "transverse-extent: stated without exact sections across one linear axis and at most "
-            f"one angle (section_axis {mech.section_axis!r}, angular {tuple(mech.angular)})"
-        ]
+    try:
+        across_axis, _ = section_axes(mech)
+    except ValueError as exc:
+        return [f"transverse-extent: stated, but {exc}"]
     lower, upper = (np.asarray(e, dtype=float) for e in extent)
     if lower.shape != angles.shape or upper.shape != angles.shape:
         return [
             f"transverse-extent: expected (lower, upper) of shape {angles.shape} for {angles.size} "
             f"orientations; got {lower.shape} and {upper.shape}"
         ]
-    across = poses[:, linear[0]]
+    across = poses[:, across_axis]
     slack = 1e-9 * (1.0 + np.abs(lower) + np.abs(upper))
     with np.errstate(invalid="ignore"):
         within = (across >= lower - slack) & (across <= upper + slack)
@@ -451,7 +449,7 @@ def _check_transverse_extent(mech: Mechanism, poses: np.ndarray) -> list[str]:
     k = outside[0]
     return [
         f"transverse-extent: {outside.size} reachable poses lie outside their orientation's extent, e.g. "
-        f"pose {_fmt(poses[k])}: {mech.pose_names[linear[0]]} outside [{lower[k]:.6g}, {upper[k]:.6g}]"
+        f"pose {_fmt(poses[k])}: {mech.pose_names[across_axis]} outside [{lower[k]:.6g}, {upper[k]:.6g}]"
     ]
 
 

@@ -1977,6 +1977,30 @@ def _reachable_orientations(
     return lower, upper
 
 
+def section_axes(mechanism: Mechanism) -> tuple[int, int | None]:
+    """The pose columns across a mechanism's exact sections: its one linear transverse axis
+    (3-RPR: y) and its one angle (3-RPR: phi; None without one).
+
+    Raises
+    ------
+    ValueError
+        Unless the mechanism has a :attr:`~kinematics.base.Mechanism.section_axis` and, besides
+        it, exactly one linear pose variable and at most one angle: the only layout the product
+        rule of :func:`_integrate_sections` (and a stated
+        :meth:`~kinematics.base.Mechanism.transverse_extent`) covers.
+    """
+    section = mechanism.section_axis
+    others = [j for j in range(mechanism.dof) if j != section]
+    angular = [j for j in others if mechanism.angular[j]]
+    linear = [j for j in others if not mechanism.angular[j]]
+    if section is None or len(linear) != 1 or len(angular) > 1:
+        raise ValueError(
+            f"{mechanism.name}: exact sections need a section axis, one linear transverse axis and at most "
+            f"one angle (section_axis {section!r}, angular {tuple(mechanism.angular)})"
+        )
+    return linear[0], (angular[0] if angular else None)
+
+
 def _integrate_sections(mechanism, resolution, orientation, min_ic, length):
     """Exact sections along ``mechanism.section_axis`` (3-RPR: x), a product rule across them.
 
@@ -2003,20 +2027,15 @@ def _integrate_sections(mechanism, resolution, orientation, min_ic, length):
     """
     section = mechanism.section_axis
     lo, hi = mechanism.pose_bounds(orientation)
-    others = [j for j in range(mechanism.dof) if j != section]
-    angular = [j for j in others if mechanism.angular[j]]
-    linear = [j for j in others if not mechanism.angular[j]]
-    if len(linear) != 1 or len(angular) > 1:
-        raise ValueError(f"{mechanism.name}: exact sections need one linear transverse axis and at most one angle")
-    ty = linear[0]
+    ty, angle = section_axes(mechanism)
     if not (hi[section] > lo[section] and hi[ty] > lo[ty]):  # an empty box (2-RPR: b > 2 q_max)
         return 0.0, (0.0, 0.0, 0.0), 0, 0, None
     ends = mechanism.transverse_extent(np.array(orientation, dtype=float))  # None: not known
     nodes = SECTION_NODES if ends is None else EXTENT_SECTION_NODES
     n_y = max(int(math.ceil(nodes[1] * resolution)), 2)
-    if angular and orientation[1] > orientation[0]:
+    if angle is not None and orientation[1] > orientation[0]:
         n_a = max(int(math.ceil(nodes[0] * resolution)), 1)  # rounded up, as the rows
-        span = orientation if ends is None else _reachable_orientations(mechanism, angular[0], orientation, n_a, ends)
+        span = orientation if ends is None else _reachable_orientations(mechanism, angle, orientation, n_a, ends)
         if span is None:
             return 0.0, (0.0, 0.0, 0.0), 0, 0, None
         ha = (span[1] - span[0]) / n_a
@@ -2037,8 +2056,8 @@ def _integrate_sections(mechanism, resolution, orientation, min_ic, length):
         ys = extent[0][kept][:, None] + hy[:, None] * (rows % n_y)
     poses = np.zeros((ys.size, mechanism.dof))
     poses[:, ty] = ys.ravel()
-    if angular:
-        poses[:, angular[0]] = np.repeat(layers, n_y)
+    if angle is not None:
+        poses[:, angle] = np.repeat(layers, n_y)
     step = (float(hi[section]) - float(lo[section])) / max(nodes[2] * resolution, 1.0)
     measure, reach, integral, ic_min, ic_max, evaluated = mechanism.exact_sections(
         poses, float(lo[section]), step, min_ic, length

@@ -205,3 +205,19 @@ def test_an_extent_that_leaves_out_reachable_poses_is_a_failure():
     assert failures[0].startswith("transverse-extent: ") and "reachable poses lie outside" in failures[0]
     assert failures[1].startswith("workspace: the exact sections give")
     assert " y outside [" in failures[0]
+
+
+class ExtentWithoutSections(RPR3):
+    name = "extent_without_sections"
+    section_axis = None  # the grid integrates it; a stated extent has no rows to span
+
+
+def test_an_extent_without_exact_sections_is_a_failure():
+    """A transverse extent is the span of the sections' rows: stated by a mechanism without exact
+    sections, the harness says so (the layout check of ``kinematics.workspace.section_axes``)."""
+    failures = check_mechanism(ExtentWithoutSections, n_poses=50)
+    extent = [f for f in failures if f.startswith("transverse-extent: ")]
+    assert extent == [
+        "transverse-extent: stated, but extent_without_sections: exact sections need a section axis, one "
+        "linear transverse axis and at most one angle (section_axis None, angular (False, False, True))"
+    ]
