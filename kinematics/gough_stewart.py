@@ -439,9 +439,10 @@ class GoughStewart(Mechanism):
     def _kernel_arguments(self, poses: np.ndarray) -> tuple:
         """The leading arguments of the compiled leg kernels (:func:`_reachable_jacobians`,
         :func:`_margins`): the poses, their one rotation when they share it (else shape
-        (0, 3, 3)), the joints and joint axes, the leg range (mm)."""
+        (0, 3): 2-D either way, so that each kernel compiles once), the joints and joint axes,
+        the leg range (mm)."""
         poses = np.ascontiguousarray(poses, dtype=float)
-        rot = np.ascontiguousarray(rotation(poses[:1])[0]) if _one_orientation(poses) else np.empty((0, 3, 3))
+        rot = np.ascontiguousarray(rotation(poses[:1])[0]) if _one_orientation(poses) else np.empty((0, 3))
         joints = (self.base, self.platform, self.base_axes, self.platform_axes)
         return (poses, rot, *(np.ascontiguousarray(a) for a in joints), self.q_min, self.q_max)
 
@@ -937,6 +938,16 @@ def _leg(rot, pose, base, platform, base_axes, platform_axes, i):
     return ax, ay, az, length, ux, uy, uz, cos_base, ux * mx + uy * my + uz * mz
 
 
+@kernels.inline_jit
+def _copy_into(target, source):
+    """``target[:, :] = source`` (2-D, the same shape), element by element. Why: an array
+    assigned to a slice makes numba compile its shape-mismatch message (string formatting),
+    about 10 s of this module's compile on a machine without the cache (measured), for a copy."""
+    for i in range(source.shape[0]):
+        for j in range(source.shape[1]):
+            target[i, j] = source[i, j]
+
+
 @kernels.jit
 def _reachable_jacobians(
     poses, one_rotation, base, platform, base_axes, platform_axes, q_min, q_max, cone_base, cone_platform, column_scale
@@ -945,13 +956,13 @@ def _reachable_jacobians(
     ``q_min..q_max`` (mm), cone angles (rad) within ``cone_base`` / ``cone_platform``
     (:meth:`GoughStewart.within_joint_limits`), and ``J diag(column_scale)`` with the rows of
     :meth:`GoughStewart._jacobian`. ``one_rotation`` (3, 3): every pose's R when all share one
-    orientation, else shape (0, 3, 3). Returns (N, 6, 6), rows of NaN where the pose is out."""
+    orientation, else shape (0, 3). Returns (N, 6, 6), rows of NaN where the pose is out."""
     count = poses.shape[0]
     out = np.empty((count, 6, 6))
     rot = np.empty((3, 3))
     rate = np.empty((3, 3))
     if one_rotation.shape[0] == 3:
-        rot[:, :] = one_rotation
+        _copy_into(rot, one_rotation)
         _rotation_and_rate_map(poses[0, 3], poses[0, 4], poses[0, 5], np.empty((3, 3)), rate)
     jac = np.empty((6, 6))
     for p in range(count):
@@ -981,7 +992,7 @@ def _reachable_jacobians(
         if not ok:
             out[p, :, :] = np.nan
             continue
-        out[p, :, :] = jac
+        _copy_into(out[p], jac)
     return out
 
 
@@ -994,7 +1005,7 @@ def _margins(poses, one_rotation, base, platform, base_axes, platform_axes, q_mi
     rot = np.empty((3, 3))
     rate = np.empty((3, 3))
     if one_rotation.shape[0] == 3:
-        rot[:, :] = one_rotation
+        _copy_into(rot, one_rotation)
     for p in range(count):
         if one_rotation.shape[0] != 3:
             _rotation_and_rate_map(poses[p, 3], poses[p, 4], poses[p, 5], rot, rate)
