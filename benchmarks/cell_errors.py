@@ -18,6 +18,16 @@ compare with the error against a 4x finer grid (``benchmarks.accuracy``). A diag
 target: it says which cells the next cell rule must treat. Mechanisms with an exact axis (H4)
 are not supported (a cell's fraction there is a length, not a membership), nor those integrated
 by exact sections (the 2-RPR, the 3-RPR). Seeded (seed 1).
+
+``--candidate`` also measures a cell rule that is not in the code, on the same random points as
+the Monte Carlo (so that the two rules' difference carries no sampling noise):
+**linear margins** (:func:`linear_margin_inside`). Each of the mechanism's margins and the
+dexterity margin ``1/kappa^2 - limit^2`` is taken as linear over a cut node's cell: its value at
+the node, its central difference between the neighbouring nodes (one-sided where one is
+undefined), and, along an axis whose edge crossing that margin places, the secant through
+that crossing. The cell's inside part is the intersection of their half-spaces: an edge where
+two constraint surfaces meet, and a slab between two of them, keep their shape, which one plane
+per node cannot (docs/accuracy.md, "Order").
 """
 
 from __future__ import annotations
@@ -30,6 +40,7 @@ from scipy.ndimage import maximum_filter, minimum_filter
 from benchmarks.accuracy import SCAN, SCAN_SEED, designs, random_designs
 from kinematics import MECHANISMS, kernels
 from kinematics import workspace as ws
+from kinematics.workspace import _grid_poses
 
 #: cells per call of the membership test
 BATCH = 500
@@ -85,6 +96,132 @@ def _monte_carlo_fractions(seen: dict, nodes: np.ndarray, points: int, rng: np.r
             poses[:, j] += (rng.random(poses.shape[0]) - 0.5) * width
         out[start : start + BATCH] = seen["values"](poses)[0].reshape(-1, points).mean(axis=1)
     return out
+
+
+def _cell_points(seen: dict, nodes: np.ndarray, points: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """``points`` uniform random points in each cell of ``nodes`` (flat indices): their offsets
+    from the node in cell widths (M, points, d) along the sampled axes, and their membership
+    (M, points)."""
+    axes, sampled, inside, widths = seen["axes"], seen["sampled"], seen["inside"], seen["widths"]
+    index = np.unravel_index(nodes, inside.shape)
+    centres = np.column_stack([axes[j][index[j]] for j in range(inside.ndim)])
+    offsets = rng.random((nodes.size, points, len(sampled))) - 0.5
+    member = np.empty((nodes.size, points), dtype=bool)
+    for start in range(0, nodes.size, BATCH):
+        poses = np.repeat(centres[start : start + BATCH], points, axis=0)
+        for k, (j, width) in enumerate(zip(sampled, widths)):
+            poses[:, j] += offsets[start : start + BATCH, :, k].ravel() * width
+        member[start : start + BATCH] = seen["values"](poses)[0].reshape(-1, points)
+    return offsets, member
+
+
+def _node_margins(seen: dict) -> np.ndarray:
+    """Every grid node's margins (grid shape + (K + 1,)): the mechanism's reachability margins and
+    the dexterity margin ``1/kappa^2 - limit^2`` (NaN where a margin is undefined)."""
+    values, axes, inside = seen["values"], seen["axes"], seen["inside"]
+    poses = _grid_poses(axes, 0, inside.size)
+    margins = values.margins(poses.copy())
+    ic = values(poses.copy())[2]
+    return np.column_stack([margins, ic**2 - values.min_ic**2]).reshape(inside.shape + (-1,))
+
+
+def _differences(margins: np.ndarray, j: int) -> np.ndarray:
+    """The change of ``margins`` (grid shape + (K,)) per node along grid axis ``j``: the central
+    difference, one-sided where a neighbour is missing or undefined, 0 where both are."""
+    ahead, behind = np.full(margins.shape, np.nan), np.full(margins.shape, np.nan)
+    lower, upper = [slice(None)] * margins.ndim, [slice(None)] * margins.ndim
+    lower[j], upper[j] = slice(0, -1), slice(1, None)
+    step = margins[tuple(upper)] - margins[tuple(lower)]
+    ahead[tuple(lower)], behind[tuple(upper)] = step, step
+    both = np.isfinite(ahead) & np.isfinite(behind)
+    one = np.where(np.isfinite(ahead), ahead, np.where(np.isfinite(behind), behind, 0.0))
+    return np.where(both, 0.5 * (ahead + behind), one)
+
+
+def linear_margin_inside(seen: dict, nodes: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """Membership (M, points) of the points ``offsets`` (M, points, d; cell widths from the node)
+    of the cells of ``nodes`` (flat indices) under the candidate rule "linear margins" (module
+    docstring): every margin ``m_c(node) + g_c . offset >= 0``. A margin undefined at the node
+    (an angle where the inverse kinematics has no solution) is extrapolated from a neighbour where
+    it is defined; the slope along an axis is the secant through the edge crossing of that axis
+    whose margin is nearest 0 there (for each side's crossing within the edge)."""
+    inside, sampled, axes, widths, values = (seen[k] for k in ("inside", "sampled", "axes", "widths", "values"))
+    shape, d = inside.shape, len(sampled)
+    grid = _node_margins(seen)
+    count = grid.shape[-1]
+    slopes = np.stack([_differences(grid, j) for j in sampled], axis=-1).reshape(-1, count, d)
+    grid = grid.reshape(-1, count)
+    at, slope = grid[nodes].copy(), slopes[nodes].copy()  # (M, K), (M, K, d)
+    index = np.array(np.unravel_index(nodes, shape))
+    for k, j in enumerate(sampled):  # undefined at the node: from the first neighbour that defines it
+        for step in (1, -1):
+            neighbour = index[j] + step
+            within = (neighbour >= 0) & (neighbour < shape[j])
+            flat = nodes + step * int(np.prod(shape[j + 1 :]))
+            rows, margin = np.nonzero(~np.isfinite(at) & within[:, None])
+            there = flat[rows]
+            known = np.isfinite(grid[there, margin])
+            rows, margin, there = rows[known], margin[known], there[known]
+            at[rows, margin] = grid[there, margin] - step * slopes[there, margin, k]
+            slope[rows, margin] = slopes[there, margin]
+    for k, j in enumerate(sampled):  # the secant through each edge crossing, for the margin it belongs to
+        for crossings, sign in ((seen["crossings"][k][1], 1.0), (seen["crossings"][k][0], -1.0)):
+            distance = crossings.ravel()[nodes] / widths[k]
+            rows = np.nonzero(np.isfinite(distance) & (distance > 1e-9))[0]
+            if not rows.size:
+                continue
+            poses = np.column_stack([axes[jj][index[jj, rows]] for jj in range(inside.ndim)])
+            poses[:, j] += sign * distance[rows] * widths[k]
+            there = np.column_stack([values.margins(poses.copy()), values(poses.copy())[2] ** 2 - values.min_ic**2])
+            nearness = np.where(np.isfinite(there), np.abs(there) / (np.abs(slope[rows, :, k]) + 1e-300), np.inf)
+            margin = np.argmin(nearness, axis=1)
+            defined = np.isfinite(at[rows, margin])
+            rows, margin = rows[defined], margin[defined]
+            slope[rows, margin, k] = -at[rows, margin] / (sign * distance[rows])
+    linear = at[:, None, :] + np.einsum("mpd,mkd->mpk", offsets, slope)
+    return np.where(np.isfinite(linear), linear >= 0.0, True).all(axis=2)
+
+
+def candidate(mech, points: int = 200, seed: int = 1) -> list[tuple[str, float, float, float, float]]:
+    """Rows ``(rule, net error, at inside nodes, at outside nodes, mean |error| per cell)`` over the
+    cut cells, in % of V (the last a fraction of a cell), against the membership of random points:
+    the code's rule (its exact cut fractions: the row carries the Monte Carlo's noise, in its mean
+    error per cell too), the same planes tested on those points, and the candidate "linear
+    margins" on those points (these two rows differ without sampling noise)."""
+    seen = _captured_cut_cells(mech)
+    if "inside" not in seen or seen["values"].exact is not None:
+        raise SystemExit(f"{mech.name}: exact sections or an exact axis; not supported")
+    d = len(seen["sampled"])
+    pairs = list(zip(seen["crossings"], seen["widths"]))
+    near = np.stack([np.minimum(minus, plus) / w for (minus, plus, _, _), w in pairs]).reshape(d, -1)
+    toward = np.stack([np.where(plus <= minus, 1.0, -1.0) for (minus, plus, _, _), _ in pairs]).reshape(d, -1)
+    cut = np.nonzero(np.isfinite(near).any(axis=0))[0]
+    is_in = seen["inside"].ravel()[cut]
+    offsets, member = _cell_points(seen, cut, points, np.random.default_rng(seed))
+    truth = member.mean(axis=1)
+    cells = float(seen["sums"][0])
+    # the code's plane tested on the same points (its fading left out): the node's side where
+    # sum_k u_k * direction_k / distance_k < 1 over the axes with a crossing
+    plane = np.where(np.isfinite(near[:, cut]), toward[:, cut] / np.maximum(near[:, cut], 1e-12), 0.0).T
+    node_side = np.einsum("mpd,md->mp", offsets, plane) < 1.0
+    rules = {
+        "plane through the nearest crossings (the code)": np.where(is_in, seen["own"], 1.0 - seen["own"]),
+        "the same planes on the points (no fading)": np.where(is_in[:, None], node_side, ~node_side).mean(axis=1),
+        "linear margins (candidate, not in the code)": linear_margin_inside(seen, cut, offsets).mean(axis=1),
+    }
+    rows = []
+    for rule, counted in rules.items():
+        diff = counted - truth
+        rows.append(
+            (
+                rule,
+                100 * float(diff.sum()) / cells,
+                100 * float(diff[is_in].sum()) / cells,
+                100 * float(diff[~is_in].sum()) / cells,
+                float(np.abs(diff).mean()),
+            )
+        )
+    return rows
 
 
 def breakdown(mech, points: int = 400, seed: int = 1) -> list[tuple[str, int, float]]:
@@ -145,6 +282,7 @@ def main() -> None:
     parser.add_argument("mechanism")
     parser.add_argument("design", help='"paper", "optimum k", "random k" or "scan k" (benchmarks.accuracy)')
     parser.add_argument("--points", type=int, default=400)
+    parser.add_argument("--candidate", action="store_true", help="also measure the candidate rule (linear margins)")
     args = parser.parse_args()
     if args.mechanism not in MECHANISMS:
         parser.error(f"mechanism={args.mechanism!r} is invalid: allowed {', '.join(sorted(MECHANISMS))}")
@@ -157,6 +295,13 @@ def main() -> None:
     print(f"{args.mechanism}, {args.design}: rule minus Monte Carlo ({args.points} points a cell), % of V")
     for label, count, percent in rows:
         print(f"  {label:56s} {count:6d} cells  {percent:+.4f} %")
+    if args.candidate:
+        print(f"cut cells, rule minus the membership of the same {args.points} points a cell, % of V:")
+        for rule, net, at_in, at_out, per_cell in candidate(pool[args.design], args.points):
+            print(
+                f"  {rule:48s} {net:+.4f} % (inside nodes {at_in:+.4f} %, outside {at_out:+.4f} %), "
+                f"mean |error| {per_cell:.4f} of a cell"
+            )
 
 
 if __name__ == "__main__":
