@@ -37,7 +37,9 @@ from kinematics.workspace import default_resolution, evaluate  # noqa: E402
 REFERENCE_FACTOR = 4
 #: resolutions of the ladder, in multiples of the default
 LADDER = (0.5, 0.75, 1.0, 1.5, 2.0)
-REPEATS = 5
+#: timing rounds (the least counts). Why 15: with 5, the 3-RPR's ratio on a quiet machine read
+#: 1.69x in one run and 2.00x in the next; with 15 rounds two runs read 1.72x and 1.76x
+REPEATS = 15
 W_D = 0.5
 #: the wider check: this many further random designs per mechanism (seeded), at each method's
 #: default against the same reference rule
@@ -314,7 +316,7 @@ estimate in most cases, not all, often 2-10x conservative.
 
 **Measured against the issue's targets.** The verdict per mechanism is computed from the
 tables and printed at the top of "Measured" below (old and new timed alternately in one run,
-the process's CPU time, least of 5 per design, mean over the designs; on the shared 2-core
+the process's CPU time, least of 15 per design, mean over the designs; on the shared 2-core
 machine a single figure moves by 10-20 % between runs: a ratio near 2x can fall on either
 side). Where the cost goes is measured phase by phase in the table "Where the new method's
 time goes": the fine pass alone (the grid's nodes, nothing else) is the floor of the method at
