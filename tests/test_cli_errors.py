@@ -65,6 +65,12 @@ def test_an_unusable_report_path_is_refused_before_the_report(tmp_path, capsys):
         (["sample.n=nan", "+debug=fast"], ["sample.n=nan is invalid: allowed an integer in [1, 1000000]"], "merging"),
         (["evaluate.allow_coarse=maybe"], ["evaluate.allow_coarse=maybe is invalid: allowed true or false"], "merging"),
         (["objective.wd=0.5"], ["did you mean objective.w_d?"], "To append"),
+        # a weight the objective ignores would be recorded as if it had been used
+        (
+            ["+experiment=h4_mixed", "objective=volume", "objective.w_d=0.3", "+debug=fast"],
+            ["error: objective.w_d=0.3 is invalid: allowed 0 with objective=volume (only objective=mixed uses w_d)"],
+            "Traceback",
+        ),
         (
             ["evaluate.method=foo"],
             ["error: evaluate.method='foo' is invalid: allowed one of grid, midpoint"],
@@ -264,3 +270,13 @@ def test_the_time_budget_counts_the_workers_the_machine_has(tmp_path, monkeypatc
     assert "more parallel.n_jobs" not in _refused([*bound, f"parallel.n_jobs={cores}"], capsys)
     if cores > 1:
         assert "more parallel.n_jobs" in _refused([*bound, "parallel.n_jobs=1"], capsys)
+
+
+def test_another_objective_on_a_mixed_experiment_takes_its_own_w_d():
+    """``+experiment=h4_mixed objective=volume``: the experiment leaves w_d to its objective option
+    (volume: 0), so switching the objective needs no second override."""
+    from pipeline.config import validate
+    from tests.test_config_sources import _compose
+
+    assert validate(_compose(["+experiment=h4_mixed", "objective=volume"])).objective.w_d == 0.0
+    assert validate(_compose(["+experiment=h4_max_gdi"])).objective.w_d == 1.0

@@ -86,3 +86,20 @@ def test_mechanism_defaults_are_written_once():
                 assert default == value, (
                     f"{name}: {key} defaults to {default!r} in __init__, {value!r} in default_fixed"
                 )
+
+
+def test_a_study_is_its_config_without_the_seed_and_w_d():
+    """``Config.study_hash``: the seeds and the w_d points of one experiment are one study (one line
+    of a trade-off, one group of seeds in the report), while an override of anything else (the
+    orientation, the resolution) under the same experiment name is another."""
+    from pipeline.config import validate
+
+    def hashes(*overrides: str) -> tuple[str, str]:
+        c = validate(_compose(["+experiment=h4_mixed", *overrides]))
+        return c.study_hash(), c.config_hash()
+
+    base, base_run = hashes()
+    assert hashes("optimizer.seed=7")[0] == base and hashes("objective.w_d=0.8")[0] == base
+    assert hashes("optimizer.seed=7")[1] != base_run  # another run of that study
+    assert hashes("mechanism.orientation=[10,10]")[0] != base
+    assert hashes("evaluate.resolution=20", "evaluate.allow_coarse=true")[0] != base

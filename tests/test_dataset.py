@@ -110,6 +110,7 @@ def test_runs_with_the_same_folder_names_never_overwrite_each_other(tmp_path):
     best = pd.read_parquet(dataset / "best")
     assert len(best) == 2 and best["run_id"].is_unique
     assert best["config_hash"].nunique() == 1  # the same study, run twice: two rows, one hash
+    assert best["study_hash"].nunique() == 1 and len(best["study_hash"].iloc[0]) == 16  # its study, from the manifest
 
 
 def test_only_complete_runs_are_taken(tmp_path, caplog):

@@ -224,7 +224,7 @@ def test_run_figure_titles_fit_for_every_mechanism(name, tmp_path, saved, monkey
     monkeypatch.setattr(slices, "SLICE_RESOLUTION", 10)
     config = MechanismConfig(name=name)
     mech = config.build(config.centre)
-    what = f"{name}, mixed, w_d = 0.5, seed 0"
+    what = f"{plot_module.DEBUG_MARK}: {name}, mixed, w_d = 0.5, seed 0"  # a debug run's, the longest
     plot_module.plot_workspace(
         mech,
         config.orientation_rad() or mech.default_orientation,
@@ -382,3 +382,51 @@ def test_report_gallery_names_each_panel_s_own_slice(saved):
     workspace_gallery(rows.iloc[:1], configs, "workspace")
     assert f"slice {labels['a']}" in saved[-1]._suptitle.get_text()
     assert "slice" not in saved[-1].axes[0].get_title()
+
+
+def test_tradeoff_keeps_apart_an_experiment_run_with_an_override(tmp_path, saved):
+    """h4_mixed's seeds 0, 7, 11 (one study; seed 0 twice, a repeat) and h4_mixed again with another
+    orientation (another study, another ``study_hash``) at w_d = 0.5: two lines, the study's η the
+    mean of its three distinct seeds, the other's its own, never averaged together; the labels
+    tell the two apart by their hashes' first digits (a new user's report mixed them)."""
+    study, other = "48bd744ccf5e7f27", "33d895a1595e2f1f"
+    runs = pd.DataFrame(
+        {
+            "objective": ["mixed"] * 5,
+            "mechanism": ["h4"] * 5,
+            "optimizer": ["ga"] * 5,
+            "experiment": ["h4_mixed"] * 5,
+            "w_d": [0.5] * 5,
+            "seed": [0, 0, 7, 11, 0],
+            "config_hash": ["a", "a", "b", "c", "d"],
+            "study_hash": [study] * 4 + [other],
+            "gdi": [0.30, 0.30, 0.31, 0.32, 0.40],
+            "suri": [0.10] * 5,
+            "objective_value": [0.20, 0.20, 0.19, 0.18, 0.237],
+        }
+    )
+    plot_module.plot_tradeoff(runs, tmp_path / "t.png")
+    ax = saved[-1].axes[0]
+    eta = sorted(round(float(line.get_ydata()[0]), 9) for line in ax.lines if line.get_linestyle() == ":")
+    assert eta == [0.19, 0.237]
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert {"ga / h4_mixed [48bd74] (3 seeds)", "ga / h4_mixed [33d895] (1 seed)"} <= set(legend)
+    assert not ax.get_title().startswith("DEBUG")
+    check_figure(saved[-1])
+    # debug runs (+debug presets) say so on the figure, not only in the config
+    plot_module.plot_tradeoff(runs.assign(purpose="debug"), tmp_path / "d.png")
+    assert saved[-1].axes[0].get_title().replace("\n", " ").startswith(plot_module.DEBUG_RUNS_MARK)
+    check_figure(saved[-1])
+
+
+def test_a_repeat_is_the_same_config_not_the_same_seed_number():
+    """Repeats (equal ``config_hash``) count once; two runs of seed 0 under different configs are
+    both kept; a table without ``config_hash`` falls back to (keys, seed)."""
+    best = pd.DataFrame({"seed": [0, 0, 0], "w_d": [0.5] * 3, "config_hash": ["a", "a", "b"]})
+    assert list(plot_module.distinct_seeds(best, ["w_d"]).index) == [0, 2]
+    assert list(plot_module.distinct_seeds(best.drop(columns="config_hash"), ["w_d"]).index) == [0]
+    assert plot_module.study_labels([("ga", "abcdef12"), ("ga", "12345678"), ("cmaes", "abcdef12")]) == [
+        "ga [abcdef]",
+        "ga [123456]",
+        "cmaes",
+    ]

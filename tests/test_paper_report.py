@@ -12,7 +12,7 @@ import pytest
 from hydra import compose, initialize_config_dir
 
 from pipeline.config import CONFIG_DIR, register_configs
-from pipeline.reproduction.paper_report import compare
+from pipeline.reproduction.paper_report import compare, report
 from pipeline.reproduction.papers import load_paper, paper_names
 from pipeline.reproduction.readings import H4_PAPER
 
@@ -136,3 +136,43 @@ def test_report_refusals_are_one_line(args, field, tmp_path):
     assert proc.returncode == 2 and "Traceback" not in proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and field in lines[0], proc.stderr
+
+
+def test_report_leaves_out_debug_runs_counts_a_repeat_once_and_keeps_studies_apart(tmp_path):
+    """What a new user's dataset mixed into Table 3: a +debug run, a repeat of seed 0, h4_mixed run
+    again with another orientation (another study, its V in cm³), and a Tricept run whose design
+    variable ``d`` is a column empty on the H4's rows. The report: the study's two distinct seeds,
+    the other study on its own line, V with its unit, the H4's d from ``param_d_cm``."""
+    study, other = "48bd744ccf5e7f27", "33d895a1595e2f1f"
+    best = pd.DataFrame(
+        {
+            "run_id": [f"r{k}" for k in range(6)],
+            "mechanism": ["h4"] * 5 + ["tricept"],
+            "objective": ["mixed"] * 6,
+            "w_d": [0.5] * 6,
+            "optimizer": ["ga"] * 6,
+            "seed": [0, 0, 7, 0, 0, 0],
+            "config_hash": ["a", "a", "b", "c", "d", "e"],
+            "study_hash": [study, study, study, other, "f" * 16, "e" * 16],
+            "purpose": ["study", "study", "study", "study", "debug", "study"],
+            "volume": [100.0, 100.0, 200.0, 5000.0, 1.0, 9.0],
+            "volume_unit": ["cm³·rad", "cm³·rad", "cm³·rad", "cm³", "cm³·rad", "mm·rad²"],
+            "gdi": [0.05, 0.05, 0.07, 0.2, 0.9, 0.5],
+            "param_d_cm": [10.0, 10.0, 14.0, 12.0, 1.0, np.nan],
+            "param_h_cm": [9.0] * 5 + [np.nan],
+            "param_Qz_cm": [40.0] * 5 + [np.nan],
+            "d": [np.nan] * 5 + [100.0],
+        }
+    )
+    dataset = tmp_path / "dataset"
+    for table, frame in (("best", best), ("runs", pd.DataFrame({"run_id": best["run_id"], "source": ""}))):
+        (dataset / table).mkdir(parents=True)
+        frame.to_parquet(dataset / table / "part.parquet")
+    text = report(dataset, "seed000_h4")
+    assert f"| Table 3 (w_d = 0.5) | ga [48bd74] | 2 | V (cm³·rad) | 11304 | {150.0:.4g} ± {50.0:.2g} |" in text
+    assert "| Table 3 (w_d = 0.5) | ga [48bd74] | 2 | d | 12.6 | 12 ± 2 |" in text
+    assert "| Table 3 (w_d = 0.5) | ga [33d895] | 1 | V (cm³) | 11304 | 5000 |" in text
+    assert "0.9" not in text and "Debug runs only" not in text  # the debug run left out, and not a smoke test
+    smoke = best.assign(purpose="debug")
+    smoke.to_parquet(dataset / "best" / "part.parquet")
+    assert "**Debug runs only**" in report(dataset, "seed000_h4")

@@ -68,10 +68,12 @@ def test_report_table_units_gaps_captions_and_seeds(sweep):
     for label in best["reference_gap_label"]:
         assert html.escape(label) in text
     assert "rpr2, mixed, w_d = 0.5, ga, seed 0" in text  # captions name what a run is
+    assert "<strong>3 of 3 runs are debug runs</strong>" in text  # +debug=fast: said above everything
     # the repeat of seed 0 is counted once: 3 runs, 2 distinct seeds, 1 repeat
-    row = re.search(r"<tr><td>rpr2</td><td>mixed</td><td>0.5</td><td>ga</td><td>rpr2_mixed</td>(.*?)</tr>", text).group(
-        1
-    )
+    row = re.search(
+        r"<tr><td>rpr2</td><td>mixed</td><td>0.5</td><td>ga</td><td>rpr2_mixed</td><td>[0-9a-f]{16}</td>(.*?)</tr>",
+        text,
+    ).group(1)
     assert re.findall(r"<td>([^<]*)</td>", row)[:4] == ["3", "2", "0, 1", "1"]
     assert '<meta name="viewport"' in text and "overflow-x: auto" in text
     assert "<script src=" not in text and "https://" not in text  # offline: nothing fetched

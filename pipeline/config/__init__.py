@@ -14,6 +14,7 @@ from pipeline.config.schema import (
     PathsConfig,
     PlotConfig,
     SampleConfig,
+    study_hash,
 )
 from pipeline.config.validate import NODES_PER_SECOND, validate
 from pipeline.errors import ConfigError
@@ -35,5 +36,6 @@ __all__ = [
     "REFERENCE_OPTIMIZER",
     "SampleConfig",
     "register_configs",
+    "study_hash",
     "validate",
 ]

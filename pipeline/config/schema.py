@@ -42,13 +42,23 @@ class ObjectiveConfig:
 
     #: the maximised objective (the group option `objective=NAME` sets it)
     name: str = "mixed"
-    #: weight of the GDI in η = w_d·GDI + (1 − w_d)·SURI, [0, 1] (seed 000 eq. 36)
+    #: weight of the GDI in η = w_d·GDI + (1 − w_d)·SURI, [0, 1] (seed 000 eq. 36); fixed for the
+    #: other objectives at the η they equal (volume and suri 0, gdi 1)
     w_d: float = 0.5
 
     def __post_init__(self) -> None:
         check("objective.name", self.name, self.name in OBJECTIVES, "one of " + ", ".join(OBJECTIVES))
         check("objective.w_d", self.w_d, finite(self.w_d) and 0 <= self.w_d <= 1, "[0, 1]")
         self.w_d = float(self.w_d)
+        # only the mixed index weighs the GDI: another objective's w_d is the eta it equals (volume
+        # and SURI 0, the GDI 1), and a run recorded with any other w_d would claim a weight it ignored
+        fixed = OBJECTIVES[self.name].default_w_d
+        check(
+            "objective.w_d",
+            self.w_d,
+            self.name == "mixed" or self.w_d == fixed,
+            f"{fixed:g} with objective={self.name} (only objective=mixed uses w_d)",
+        )
 
 
 @dataclass
@@ -206,5 +216,30 @@ class Config:
 
     def config_hash(self) -> str:
         """Content hash (16 hex digits) of :meth:`result_dict`: equal for equal studies."""
-        text = json.dumps(self.result_dict(), sort_keys=True, default=str)
-        return hashlib.sha256(text.encode()).hexdigest()[:16]
+        return _content_hash(self.result_dict())
+
+    def study_hash(self) -> str:
+        """:func:`study_hash` of :meth:`result_dict`."""
+        return study_hash(self.result_dict())
+
+
+#: the fields a study varies over its runs, (section, key) of :meth:`Config.result_dict`: runs that
+#: differ in these only are one study's seeds and its points along w_d (a trade-off's line)
+STUDY_AXES = (("optimizer", "seed"), ("objective", "w_d"))
+
+
+def _content_hash(result: dict) -> str:
+    text = json.dumps(result, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def study_hash(result: dict) -> str:
+    """Content hash (16 hex digits) of a result config (:meth:`Config.result_dict`, or a run
+    manifest's ``config``) without its :data:`STUDY_AXES`: equal for the seeds and the w_d points
+    of one study, different where anything else differs (an override of the orientation, the
+    resolution or the population under the same experiment name is another study)."""
+    reduced = {section: dict(part) if isinstance(part, dict) else part for section, part in result.items()}
+    for section, key in STUDY_AXES:
+        if isinstance(reduced.get(section), dict):
+            reduced[section].pop(key, None)
+    return _content_hash(reduced)

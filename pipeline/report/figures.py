@@ -17,13 +17,15 @@ import pandas as pd
 
 from pipeline.config import DesignSpace, MechanismConfig
 from pipeline.stages.optimise import group_gap_label
-from pipeline.stages.plot import distinct_seeds, fit_title, panel_grid, set_title
+from pipeline.stages.plot import distinct_seeds, fit_title, panel_grid, set_title, study_labels, with_study
 from pipeline.stages.slices import draw_slice, symbol, workspace_slice
 
 log = logging.getLogger(__name__)
 
-#: what makes runs one group (their seeds are samples of one study); "experiment" where recorded
-GROUP_KEYS = ["mechanism", "objective", "w_d", "optimizer", "experiment"]
+#: what makes runs one group (their seeds are samples of one study); "experiment" where recorded;
+#: ``study_hash`` keeps apart runs of one experiment name with different overrides (filled by
+#: :func:`pipeline.stages.plot.with_study`, "" for datasets that predate it)
+GROUP_KEYS = ["mechanism", "objective", "w_d", "optimizer", "experiment", "study_hash"]
 
 
 def group_keys(frame: pd.DataFrame) -> list[str]:
@@ -60,6 +62,7 @@ def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
     generation: a restarting optimiser (IPOP-CMA-ES) starts each restart from a wide population,
     whose best drops without anything being lost. One panel per mechanism because the objective's
     scale differs between mechanisms (η of a 2-RPR near 0.8, of an H4 near 0.2)."""
+    best = with_study(best)
     keys = group_keys(best)
     runs = distinct_seeds(best, keys)
     groups = runs[["run_id", *keys]].merge(history[["run_id", "generation", "best"]], on="run_id")
@@ -70,13 +73,21 @@ def convergence_figure(best: pd.DataFrame, history: pd.DataFrame) -> str:
     for ax, (objective, mechanism) in zip(axes, panels):
         part = groups[in_panel(groups, objective, mechanism)]
         references_drawn = False
-        for key, frame in part.groupby(keys, sort=True):
-            group = dict(zip(keys, key))
+        panel_groups = [(dict(zip(keys, key)), frame) for key, frame in part.groupby(keys, sort=True)]
+        names = study_labels(
+            [
+                (
+                    " / ".join(str(group[k]) for k in ("optimizer", "experiment") if str(group.get(k, "")))
+                    + (f", w_d={group['w_d']:g}" if objective == "mixed" else ""),
+                    group["study_hash"],
+                )
+                for group, _ in panel_groups
+            ]
+        )
+        for (_, frame), name in zip(panel_groups, names):
             stats = frame.groupby("generation")["best"].agg(["mean", "min", "max"])
             n_seeds = frame["run_id"].nunique()
-            label = " / ".join(str(group[k]) for k in ("optimizer", "experiment") if str(group.get(k, "")))
-            label += f", w_d={group['w_d']:g}" if objective == "mixed" else ""
-            label += f" ({n_seeds} seed{'s' if n_seeds > 1 else ''})"
+            label = f"{name} ({n_seeds} seed{'s' if n_seeds > 1 else ''})"
             (line,) = ax.plot(stats.index, stats["mean"], label=label)
             ax.fill_between(stats.index, stats["min"], stats["max"], alpha=0.2, color=line.get_color())
             members = runs[runs["run_id"].isin(frame["run_id"].unique())]

@@ -35,9 +35,10 @@ import pandas as pd
 from omegaconf import OmegaConf
 
 from kinematics import MECHANISMS
+from pipeline.config import study_hash
 from pipeline.errors import ConfigError, RunError
-from pipeline.report.figures import caption, convergence_figure, group_keys, workspace_gallery
-from pipeline.stages.plot import plot_tradeoff, symbol
+from pipeline.report.figures import GROUP_KEYS, caption, convergence_figure, group_keys, workspace_gallery
+from pipeline.stages.plot import distinct_seeds, plot_tradeoff, symbol, with_study
 from pipeline.store.dataset import DEFAULT_PURPOSES, read_dataset
 from pipeline.store.runs import MANIFEST, read_manifest
 
@@ -72,7 +73,8 @@ def load_sweep(source: Path) -> tuple[pd.DataFrame, pd.DataFrame, dict[str, Path
         history = read_dataset(source, "history", purposes)
         runs = read_dataset(source, "runs", purposes)
         dirs = {r: Path(s) for r, s in zip(runs["run_id"], runs["source"])}
-        return best, history, dirs, f"dataset {source} ({len(runs)} runs{note or ', debug runs left out'})"
+        note = f"dataset {source} ({len(runs)} runs{note or ', debug runs left out'})"
+        return fill_study_hashes(best, dirs), history, dirs, note
     frames_best, frames_history, dirs = [], [], {}
     for manifest_path in sorted(source.rglob(MANIFEST)):
         run = manifest_path.parent
@@ -84,6 +86,8 @@ def load_sweep(source: Path) -> tuple[pd.DataFrame, pd.DataFrame, dict[str, Path
         for frame in (best, history):
             frame.insert(0, "run_id", manifest["run_id"])
             frame.insert(1, "job", int(manifest["job"]))
+        best.insert(2, "study_hash", study_hash(manifest["config"]) if manifest.get("config") else "")
+        best.insert(3, "purpose", str((manifest.get("config") or {}).get("purpose", "study")))
         frames_best.append(best)
         frames_history.append(history)
         dirs[manifest["run_id"]] = run
@@ -93,6 +97,28 @@ def load_sweep(source: Path) -> tuple[pd.DataFrame, pd.DataFrame, dict[str, Path
         )
     config = sweep_config((source / "multirun.yaml").read_text()) if (source / "multirun.yaml").exists() else ""
     return (pd.concat(frames_best, ignore_index=True), pd.concat(frames_history, ignore_index=True), dirs, config)
+
+
+def debug_note(best: pd.DataFrame) -> str:
+    """A visible line above everything where any run is a debug run (``purpose``), else ""."""
+    if "purpose" not in best or not (best["purpose"].astype(str) == "debug").any():
+        return ""
+    count = int((best["purpose"].astype(str) == "debug").sum())
+    return (
+        f'<p class="note"><strong>{count} of {len(best)} runs are debug runs</strong> (+debug presets, '
+        "tiny sizes): a smoke test, not results.</p>\n"
+    )
+
+
+def fill_study_hashes(best: pd.DataFrame, dirs: dict[str, Path]) -> pd.DataFrame:
+    """``best`` with each run's ``study_hash``, from its manifest where the dataset has none (runs
+    aggregated before the column existed; "" where the run's folder is gone)."""
+    best = with_study(best)
+    for k in np.nonzero((best["study_hash"] == "").to_numpy())[0]:
+        manifest = read_manifest(dirs[best["run_id"].iloc[k]]) if best["run_id"].iloc[k] in dirs else None
+        if manifest and manifest.get("config"):
+            best.loc[best.index[k], "study_hash"] = study_hash(manifest["config"])
+    return best
 
 
 def sweep_config(text: str) -> str:
@@ -219,9 +245,11 @@ def optima_table(best: pd.DataFrame, dirs: dict[str, Path], base: Path) -> str:
 
 def seeds_table(best: pd.DataFrame) -> str:
     """Runs per group: distinct seeds (statistics run over these) and repeats of one seed."""
+    best = with_study(best)
     rows, keys = [], group_keys(best)
     for key, frame in best.groupby(keys, sort=True):
-        n_runs, n_seeds = len(frame), frame["seed"].nunique()
+        # a repeat: the same run config (study and seed) again
+        n_runs, n_seeds = len(frame), len(distinct_seeds(frame, keys))
         seeds = ", ".join(str(s) for s in sorted(frame["seed"].unique()))
         rows.append("<tr>" + "".join(_cell(v) for v in (*key, n_runs, n_seeds, seeds, n_runs - n_seeds)) + "</tr>")
     header = "".join(f"<th>{h}</th>" for h in (*keys, "runs", "distinct seeds", "seeds", "repeats of a seed"))
@@ -239,7 +267,7 @@ def galleries(best: pd.DataFrame, dirs: dict[str, Path]) -> str:
     for name in sorted(best["mechanism"].astype(str).unique()):
         rows = best[best["mechanism"].astype(str) == name].sort_values("objective_value", ascending=False)
         rows = rows[[rid in dirs and (dirs[rid] / "workspace.png").exists() for rid in rows["run_id"]]]
-        rows = rows.head(MAX_WORKSPACES)
+        rows = distinct_seeds(with_study(rows), GROUP_KEYS).head(MAX_WORKSPACES)  # a repeat draws the same panel
         configs = {rid: (read_manifest(dirs[rid]) or {}).get("config") for rid in rows["run_id"]}
         configs = {k: v for k, v in configs.items() if v}
         for kind, alt in (("workspace", "workspace"), ("inverse_condition", "1/κ")):
@@ -295,7 +323,7 @@ def build_report(source: Path, out: Path | None = None) -> str:
 <title>pm-design report: {title}</title>
 <style>{style}</style></head><body>
 <h1>pm-design report: {title}</h1>
-<p>{len(best)} complete runs; generated {time.strftime("%Y-%m-%d %H:%M:%S")}. Click a column header to sort;
+{debug_note(best)}<p>{len(best)} complete runs; generated {time.strftime("%Y-%m-%d %H:%M:%S")}. Click a column header to sort;
 scroll or click a figure to zoom (drag to pan, double-click to reset). Hover a row for its run id.</p>
 <h2>Optima</h2>{optima_table(best, dirs, base)}
 <h2>Runs and seeds</h2>{seeds_table(best)}

@@ -170,10 +170,16 @@ def reference_page() -> str:
         "",
         _first_line(schema.ObjectiveConfig.__doc__),
         "",
-        "| option | label | unit | default `w_d` |",
+        "`objective.w_d` is the GDI's weight in η, in [0, 1], with `objective=mixed` only; the other "
+        "objectives fix it at the η they equal (a run records no weight it ignored).",
+        "",
+        "| option | label | unit | `w_d` |",
         "| --- | --- | --- | --- |",
     ]
-    lines += [f"| `objective={n}` | {o.label} | {o.unit} | {o.default_w_d} |" for n, o in sorted(OBJECTIVES.items())]
+    lines += [
+        f"| `objective={n}` | {o.label} | {o.unit} | {o.default_w_d}{' (default)' if n == 'mixed' else ' (fixed)'} |"
+        for n, o in sorted(OBJECTIVES.items())
+    ]
     lines += ["", "## `optimizer`", ""]
     for name in sorted(OPTIMIZERS):
         cls = OPTIMIZERS[name]

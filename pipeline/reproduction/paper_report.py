@@ -1,10 +1,12 @@
 """Report step: a dataset's optima beside a paper's printed tables.
 
 ``python -m pipeline.reproduction.paper_report DATASET --paper seed000_h4 [--out FILE.md]``
-reads the dataset the way users do (``pd.read_parquet(DATASET / "best")``),
-keeps the runs of the paper's mechanism, and for each printed table row
-(:mod:`pipeline.reproduction.papers`) the runs of the same objective (and ``w_d`` for the
-mixed index), one line per optimiser: how many runs, and for V, GDI and each
+reads the dataset as users do (:func:`pipeline.store.dataset.read_dataset`: its debug runs
+left out), counts each repeat of a run once, keeps the runs of the paper's mechanism, and for
+each printed table row (:mod:`pipeline.reproduction.papers`) the runs of the same objective (and
+``w_d`` for the mixed index), one line per optimiser and study (an experiment run with an
+override, another orientation say, is another study: its line carries the first digits of its
+``study_hash``): how many runs, and for V (in its unit), GDI and each
 design variable the paper's number, ours as mean ± standard deviation over
 the runs, and the relative difference. Rows without runs in the dataset say
 so. It compares; it does not claim a reproduction: each paper file's header
@@ -26,8 +28,11 @@ import numpy as np
 import pandas as pd
 
 from pipeline.errors import ConfigError
+from pipeline.report.html import fill_study_hashes
 from pipeline.report.tables import rel, table
 from pipeline.reproduction.papers import load_paper, paper_names
+from pipeline.stages.plot import distinct_seeds, study_labels, with_study
+from pipeline.store.dataset import read_dataset
 from pipeline.store.parquet import PARAM_UNITS
 
 #: printed quantity -> dataset column (design quantities: :func:`_design_column`)
@@ -43,15 +48,19 @@ def _matching(best: pd.DataFrame, mechanism: str, row: dict) -> pd.DataFrame:
 
 
 def _design_column(best: pd.DataFrame, name: str) -> str:
-    """The column of a printed design quantity: the design variable itself, else the mechanism
-    parameter ``param_<name>_<unit>`` (the paper's unit: H4 cm, Tricept mm; pipeline.store.parquet)."""
-    if name in best.columns:
+    """The column of a printed design quantity in the runs ``best``: the design variable itself,
+    else the mechanism parameter ``param_<name>_<unit>`` (the paper's unit: H4 cm, Tricept mm;
+    pipeline.store.parquet). A column these runs leave empty does not count: in a dataset of
+    several mechanisms the Tricept's design variable ``d`` and the Delta's ``param_d_mm`` are
+    columns, empty on the H4's rows, whose ``d`` is ``param_d_cm``."""
+    if name in best.columns and best[name].notna().any():
         return name
     return next(
         (
             c
             for c in best.columns
-            if c == f"param_{name}" or (c.startswith(f"param_{name}_") and c[len(f"param_{name}_") :] in PARAM_UNITS)
+            if (c == f"param_{name}" or (c.startswith(f"param_{name}_") and c[len(f"param_{name}_") :] in PARAM_UNITS))
+            and best[c].notna().any()
         ),
         f"param_{name}",
     )
@@ -76,9 +85,10 @@ def compare(best: pd.DataFrame, paper: dict) -> list[list]:
             continue
         quantities = {
             **QUANTITIES,
-            **{k: _design_column(best, k) for k in row if k not in (*QUANTITIES, "table", "objective", "w_d")},
+            **{k: _design_column(runs, k) for k in row if k not in (*QUANTITIES, "table", "objective", "w_d")},
         }
-        for optimizer, group in runs.groupby("optimizer", sort=True):
+        groups = list(with_study(runs).groupby(["optimizer", "study_hash"], sort=True))
+        for (_, group), optimizer in zip(groups, study_labels([key for key, _ in groups])):
             for key, column in quantities.items():
                 if key not in row or column not in group:  # not printed for this row, or not in our runs
                     continue
@@ -86,7 +96,9 @@ def compare(best: pd.DataFrame, paper: dict) -> list[list]:
                 mean = float(values.mean())
                 spread = float(values.std()) if len(values) > 1 else math.nan
                 ours = f"{mean:.4g} ± {spread:.2g}" if len(values) > 1 else f"{mean:.4g}"
-                out.append([row["table"], optimizer, len(values), key, row[key], ours, rel(mean, row[key])])
+                units = sorted(set(group["volume_unit"].astype(str))) if "volume_unit" in group else []
+                quantity = f"{key} ({', '.join(units)})" if key == "V" and units else key
+                out.append([row["table"], optimizer, len(values), quantity, row[key], ours, rel(mean, row[key])])
     return out
 
 
@@ -98,11 +110,18 @@ def report(dataset: Path, paper_name: str) -> str:
         raise ConfigError(
             f"dataset={str(dataset)!r} is invalid: allowed a dataset directory (holding best/, written by aggregation)"
         )
-    best = pd.read_parquet(dataset / "best")
-    rows = compare(best, paper)
+    best = read_dataset(dataset, "best", purposes=None)
+    runs = read_dataset(dataset, "runs", purposes=None)
+    best = fill_study_hashes(best, {r: Path(s) for r, s in zip(runs["run_id"], runs["source"])})
+    studies = best[best["purpose"].astype(str) != "debug"] if "purpose" in best else best
+    # a dataset of debug runs only (a smoke test of this report): compared, and said so
+    smoke = studies.empty and not best.empty
+    rows = compare(distinct_seeds(best if smoke else studies, ["mechanism", "objective", "w_d", "optimizer"]), paper)
     return (
         f"# {paper_name}: the paper's tables beside {dataset}\n\n"
-        f"Ours: mean ± standard deviation over the runs of each objective and optimiser. "
+        + ("**Debug runs only** (`+debug`, tiny sizes): a smoke test of this report, not results.\n\n" if smoke else "")
+        + "Ours: mean ± standard deviation over the runs of each objective, optimiser and study "
+        "(debug runs left out, a repeat of a run counted once). "
         f"What the paper's numbers mean: `pipeline/reproduction/papers/{paper_name}.yaml`.\n\n"
         + table(["table", "optimiser", "runs", "quantity", "paper", "ours", "difference"], rows)
         + "\n"

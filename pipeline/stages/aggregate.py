@@ -44,7 +44,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from pipeline.errors import ConfigError, RunError
-from pipeline.stages.dataset_build import build_and_swap, locked
+from pipeline.stages.dataset_build import build_and_swap, locked, with_run_ids
 from pipeline.stages.dataset_checks import (
     clean_stale,
     readable_run,
@@ -158,7 +158,9 @@ def aggregate(sources: Path | list[Path], dataset_dir: Path) -> AggregateReport:
         if new or damaged or (present and read_registry(dataset_dir) is None):
             build_and_swap(dataset_dir, new, best_tables, set(damaged), sources)
         report.added = [m["run_id"] for _, m in new if m["run_id"] not in damaged]
-    report.best_tables = list(best_tables.values())
+    manifests = {m["run_id"]: m for _, m in records + rebuild}
+    # with their ids (purpose, study_hash), as the dataset has them: the sweep's figures group by them
+    report.best_tables = [with_run_ids(t, manifests[run_id]) for run_id, t in best_tables.items()]
     log.info(
         "aggregate: %d runs added, %d already present, %d skipped -> %s",
         len(report.added),

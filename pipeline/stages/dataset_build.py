@@ -19,6 +19,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from pipeline.config import study_hash
 from pipeline.errors import RunError
 from pipeline.stages.dataset_checks import dataset_files, registry_entries
 from pipeline.store.checksums import write_registry
@@ -54,32 +55,39 @@ def locked(dataset_dir: Path):
             fcntl.flock(handle, fcntl.LOCK_UN)
 
 
-def _run_tables(run: Path, manifest: dict, best: pa.Table) -> dict[str, pa.Table]:
-    """The run's tables with its ids as leading columns, and its ``runs`` row (``best``: already read)."""
+def with_run_ids(table: pa.Table, manifest: dict) -> pa.Table:
+    """``table`` (one of a run's) with the run's ids from its ``manifest`` as leading columns, as the
+    dataset stores them: run, launch and job, ``purpose`` and ``study_hash``."""
     ids = {
         "run_id": manifest["run_id"],
         "launch_id": manifest["launch_id"],
         "job": int(manifest["job"]),
         # runs recorded before the field existed were made as studies
         "purpose": str((manifest.get("config") or {}).get("purpose", "study")),
+        # which runs are one study's seeds and w_d points (the report's and the figures' groups)
+        "study_hash": study_hash(manifest["config"]) if manifest.get("config") else "",
     }
+    for k, (name, value) in enumerate(ids.items()):
+        typ = pa.int64() if name == "job" else pa.string()
+        unit, meaning = column_unit(name)
+        field = pa.field(name, typ, metadata={b"unit": unit.encode(), b"description": meaning.encode()})
+        table = table.add_column(k, field, pa.array([value] * table.num_rows, typ))
+    return table
+
+
+def _run_tables(run: Path, manifest: dict, best: pa.Table) -> dict[str, pa.Table]:
+    """The run's tables with its ids as leading columns, and its ``runs`` row (``best``: already read)."""
     out = {}
     for table in TABLES:
         path = run / f"{table}.parquet"
         if table != "best" and not path.exists():
             continue
-        data = best if table == "best" else pq.read_table(path)
-        for k, (name, value) in enumerate(ids.items()):
-            typ = pa.int64() if name == "job" else pa.string()
-            unit, meaning = column_unit(name)
-            field = pa.field(name, typ, metadata={b"unit": unit.encode(), b"description": meaning.encode()})
-            data = data.add_column(k, field, pa.array([value] * data.num_rows, typ))
-        out[table] = data
+        out[table] = with_run_ids(best if table == "best" else pq.read_table(path), manifest)
     best = out["best"].slice(0, 1).to_pandas()
     runs = pd.DataFrame(
         [
             {
-                **ids,
+                **{k: best[k].iloc[0] for k in ("run_id", "launch_id", "job", "purpose", "study_hash")},
                 "config_hash": manifest["config_hash"],
                 **{k: best[k].iloc[0] for k in ("experiment", "mechanism", "objective", "w_d", "optimizer", "seed")},
                 "status": manifest["status"],

@@ -99,9 +99,16 @@ def _save(fig: Figure, path: Path, plot=None) -> Path:
     return path
 
 
-def run_figures(mechanism, objective, optimizer, plot, optimum: dict) -> dict[str, bytes]:
+#: how the figures of debug runs (``+debug`` presets: tiny sizes) say what they are: a run's
+#: titles start with the first, a trade-off of such runs with the second
+DEBUG_MARK = "DEBUG run, not a result"
+DEBUG_RUNS_MARK = "DEBUG runs (+debug), not results"
+
+
+def run_figures(mechanism, objective, optimizer, plot, optimum: dict, purpose: str = "study") -> dict[str, bytes]:
     """The figures of one run, as file name -> content: convergence, workspace and 1/κ slices of
-    the optimum, and the Pareto front of a multi-objective optimiser.
+    the optimum, and the Pareto front of a multi-objective optimiser. A debug run's titles start
+    with :data:`DEBUG_MARK` (``purpose``: the config's).
 
     Drawn in a temporary folder and returned as bytes so that the pipeline can
     cache this stage like the others (a second identical run draws nothing).
@@ -114,6 +121,8 @@ def run_figures(mechanism, objective, optimizer, plot, optimum: dict) -> dict[st
     orientation = mechanism.orientation_rad() or mech.default_orientation
     what = f"{mech.name}, {objective.name}" + (f", w_d = {objective.w_d:g}" if objective.name == "mixed" else "")
     what += f", seed {optimizer.seed}"
+    if purpose == "debug":
+        what = f"{DEBUG_MARK}: {what}"
     unit = best["objective_unit"]
     design_volume = f"design's V = {best['volume']:.6g} {best['volume_unit']}"
     with tempfile.TemporaryDirectory() as tmp:
@@ -235,12 +244,31 @@ def plot_front(
     return _save(fig, path, plot)
 
 
+def with_study(best: pd.DataFrame) -> pd.DataFrame:
+    """``best`` with a ``study_hash`` column ("" where the dataset predates it or a row has none):
+    the key that keeps apart studies run under one experiment name with different overrides."""
+    study = best["study_hash"] if "study_hash" in best.columns else pd.Series("", index=best.index)
+    return best.assign(study_hash=study.fillna("").astype(str))
+
+
 def distinct_seeds(best: pd.DataFrame, keys: list[str]) -> pd.DataFrame:
-    """One row per (``keys``, seed): repeats of one seed (the same study run again, which gives
-    the same result) are counted once, so statistics are over distinct seeds only."""
+    """One row per run config: repeats (the same study and seed run again, equal ``config_hash``,
+    which give the same result) are counted once, so statistics are over distinct seeds only.
+    Rows of a table without ``config_hash``: one per (``keys``, seed)."""
+    if "config_hash" in best.columns:
+        return best.drop_duplicates("config_hash", keep="first")
     if "seed" not in best.columns:
         return best
     return best.drop_duplicates([*keys, "seed"], keep="first")
+
+
+def study_labels(keys: list[tuple]) -> list[str]:
+    """Legend labels of groups keyed ``(..., study_hash)``: the other keys joined by " / ", and the
+    study's first 6 hex digits where two groups would otherwise read the same."""
+    plain = [" / ".join(str(k) for k in key[:-1] if str(k)) or "runs" for key in keys]
+    return [
+        f"{label} [{key[-1][:6]}]" if plain.count(label) > 1 and key[-1] else label for label, key in zip(plain, keys)
+    ]
 
 
 #: what the trade-off draws per line group: column, label, marker and line style
@@ -250,24 +278,29 @@ TRADEOFF_QUANTITIES = (("gdi", "GDI", "o", "-"), ("suri", "SURI", "s", "--"), ("
 def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
     """GDI, SURI and η of the mixed-index optima versus w_d, one panel per mechanism (seed 000 Fig. 8).
 
-    One colour per group of comparable runs, (optimiser, experiment): a GA at w_d = 0.5 and
+    One colour per group of comparable runs, (optimiser, experiment, study): a GA at w_d = 0.5 and
     a CMA-ES at w_d = 0.8 are different studies, never one line, and never each other's
-    seeds. Within a group, runs with the same w_d and different seeds are drawn as the mean
+    seeds; nor is an experiment run with an override (another orientation, another resolution):
+    ``study_hash`` differs, and its line's label carries the hash's first digits
+    (:func:`study_labels`). Within a group, runs with the same w_d and different seeds are drawn as the mean
     with a band from their minimum to maximum; repeats of one seed count once
     (:func:`distinct_seeds`); η carries error bars, its estimated discretisation error
     (``objective_error``, the largest over the seeds). Panels in rows of at most three (:func:`panel_grid`).
     """
-    mixed = best[best["objective"].astype(str) == "mixed"]
-    group_keys = [k for k in ("optimizer", "experiment") if k in mixed.columns]
+    mixed = with_study(best[best["objective"].astype(str) == "mixed"])
+    group_keys = [k for k in ("optimizer", "experiment") if k in mixed.columns] + ["study_hash"]
     keys = [k for k in ("mechanism", *group_keys, "w_d") if k in mixed.columns]
     mixed = distinct_seeds(mixed, keys)
     mechanisms = sorted(mixed["mechanism"].astype(str).unique()) or ["none"]
     fig, axes = panel_grid(len(mechanisms), 4.8, 3.9)  # titles wrapped to 4 of a panel's 4.8 in
     for ax, name in zip(axes, mechanisms):
         part = mixed[mixed["mechanism"].astype(str) == name]
-        groups = list(part.groupby(group_keys, sort=True)) if group_keys else [((), part)] * bool(len(part))
+        groups = [
+            (key if isinstance(key, tuple) else (key,), frame) for key, frame in part.groupby(group_keys, sort=True)
+        ]
+        labels = study_labels([key for key, _ in groups])
         handles, most_seeds = [], 0
-        for number, (key, frame) in enumerate(groups):
+        for number, ((_, frame), label) in enumerate(zip(groups, labels)):
             colour = f"C{number % 10}"
             stats = frame.groupby("w_d")[["gdi", "suri", "objective_value"]].agg(["mean", "min", "max"])
             w = stats.index.to_numpy()
@@ -287,8 +320,6 @@ def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
                 )
             seeds = int(frame.groupby("w_d").size().max())
             most_seeds = max(most_seeds, seeds)
-            key = key if isinstance(key, tuple) else (key,)
-            label = " / ".join(str(k) for k in key if str(k)) or "runs"
             handles.append(
                 Line2D([], [], color=colour, lw=6, alpha=0.6, label=f"{label} ({seeds} seed{'s' * (seeds > 1)})")
             )
@@ -298,7 +329,9 @@ def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
         if len(part):
             spread = "mean and range over the seeds of each line" if most_seeds > 1 else "one seed per point"
             spread += "; bars: η's error"
-            set_title(ax, f"{name}: GDI, SURI, η of the optima vs $w_d$\n({spread})", 10, width=4.0)
+            debug = "purpose" in part and (part["purpose"].astype(str) == "debug").any()
+            title = f"{name}: GDI, SURI, η of the optima vs $w_d$\n({spread})"
+            set_title(ax, f"{DEBUG_RUNS_MARK}\n{title}" if debug else title, 10, width=4.0)
             styles = [
                 Line2D([], [], color="0.3", marker=marker, ls=style, ms=4, label=label)
                 for _, label, marker, style in TRADEOFF_QUANTITIES

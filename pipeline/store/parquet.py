@@ -55,6 +55,11 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "launch_id": ("", "the launch (process) that ran it: time_pid_token (dataset only)"),
     "job": ("", "job number within its launch (dataset only)"),
     "config_hash": ("", "content hash of the result config (equal studies, equal hash)"),
+    "study_hash": (
+        "",
+        "content hash of the result config without the seed and w_d: one study's seeds and w_d points "
+        "(dataset only; empty for runs aggregated before it existed)",
+    ),
     "experiment": ("", "experiment_name of the run"),
     "mechanism": ("", "mechanism registry name"),
     "objective": ("", "maximised objective: volume, gdi, suri or mixed"),

@@ -218,7 +218,16 @@ def _with_keys(frame: pd.DataFrame, keys: dict) -> pd.DataFrame:
 def _plots(c: Config, optimum: dict, run_dir: Path, stages: dict) -> dict[str, Path]:
     """The run's figures: a cached stage (drawn once per result), written into ``run_dir``."""
     figures = _stage(
-        stages, "plot", run_figures, c.paths.cache_dir, c.mechanism, c.objective, c.optimizer, c.plot, optimum
+        stages,
+        "plot",
+        run_figures,
+        c.paths.cache_dir,
+        c.mechanism,
+        c.objective,
+        c.optimizer,
+        c.plot,
+        optimum,
+        c.purpose,
     )
     out = {}
     for name, data in figures.items():
