@@ -73,7 +73,8 @@ columns = [
     "volume",
     "volume_unit",
 ]
-print({c: units[c] for c in columns if units.get(c)})
+# a unit that names another column (volume: "volume_unit") is that column's value in each row
+print({c: ", ".join(sorted(set(best[u].astype(str)))) if u in best else u for c in columns if (u := units.get(c))})
 best[columns]
 
 # %%
@@ -86,5 +87,5 @@ ax.set_xlabel("$w_d$ [1]")
 ax.set_ylabel("GDI, SURI, η [1]")
 ax.set_title("2-RPR optima versus $w_d$ (tiny sizes)")
 ax.legend()
-fig.savefig(out / "tradeoff_example.png", dpi=150)
+fig.savefig(out / "tradeoff_example.png", dpi=150, bbox_inches="tight")  # the x label inside the file
 print(f"wrote {out / 'tradeoff_example.png'}; the sweep's report: {next((out / 'sweeps').rglob('report.html'))}")

@@ -144,6 +144,15 @@ def _check_attributes(cls: type[Mechanism]) -> list[str]:
         both = sorted(set(fixed) & {getattr(v, "name", None) for v in variables})
         if both:
             out.append(f"attributes: default_fixed names design variables {both}")
+    if isinstance(fixed, dict):
+        # the pipeline takes each fixed parameter's default and range from fixed_parameters only
+        declared = {getattr(p, "name", None) for p in getattr(cls, "fixed_parameters", ())}
+        undeclared = sorted(set(fixed) - declared)
+        if undeclared:
+            out.append(
+                f"attributes: default_fixed {undeclared} without a FixedParameter in fixed_parameters "
+                "(kinematics.base.FixedParameter: default, range, unit; the pipeline refuses the mechanism)"
+            )
     for attr in ("default_nodes", "min_resolution"):
         value = getattr(cls, attr, None)
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:

@@ -221,3 +221,28 @@ def test_an_extent_without_exact_sections_is_a_failure():
         "transverse-extent: stated, but extent_without_sections: exact sections need a section axis, one "
         "linear transverse axis and at most one angle (section_axis None, angular (False, False, True))"
     ]
+
+
+class FixedByHand(RPR3):
+    name = "fixed_by_hand"
+
+
+# assigned after the class statement (in its body, fixed_parameters would derive default_fixed):
+# default_fixed as a plug-in might set it by hand, its ranges declared nowhere
+FixedByHand.fixed_parameters = ()
+
+
+def test_a_fixed_parameter_without_its_range_is_a_failure(tmp_path):
+    """A class that sets ``default_fixed`` by hand passes every kinematic check, but the pipeline
+    refuses it (it takes each fixed parameter's default and range from ``fixed_parameters``): the
+    harness says so first, and the pipeline's refusal (``mechanism=path``, as a user loads a class
+    of their own) names the class's omission, not an override the user never made."""
+    from pipeline.errors import ConfigError
+    from tests.test_mechanism_path import _validated
+
+    failures = check_mechanism(FixedByHand, n_poses=50)
+    assert failures and failures[0].startswith("attributes: default_fixed [") and "FixedParameter" in failures[0]
+    with pytest.raises(ConfigError) as info:
+        _validated(["mechanism=path", "mechanism.name=tests.test_conformance:FixedByHand"], tmp_path)
+    assert "FixedByHand.default_fixed has 'rho_min' but fixed_parameters declares no" in str(info.value)
+    assert "mechanism.fixed." not in str(info.value)

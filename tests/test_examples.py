@@ -65,6 +65,8 @@ def test_example_notebook_runs_in_a_jupyter_kernel(tmp_path, monkeypatch):
     ).execute()
     outputs = "".join(o.get("text", "") for c in notebook.cells if c.cell_type == "code" for o in c.outputs)
     assert "wrote" in outputs and "mm" in outputs  # the units read back with the dataset
+    # a unit that names another column is shown as that column's value (it printed 'volume_unit')
+    assert "'volume': 'mm²'" in outputs and "'objective_value': '1'" in outputs, outputs
     html = [o for c in notebook.cells if c.cell_type == "code" for o in c.outputs if "text/html" in o.get("data", {})]
     assert html, "the dataset table is displayed as a DataFrame"
     assert_figure(out / "tradeoff_example.png")

@@ -11,6 +11,7 @@ columns that name the launch (ids, wall time, the launcher's own overrides).
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -36,6 +37,14 @@ LAUNCHERS = {
     "joblib": ["hydra/launcher=joblib", "hydra.launcher.n_jobs=2", "parallel.n_jobs=1"],
     "submitit_local": ["hydra/launcher=submitit_local", "parallel.n_jobs=1"],
     "dask_local_cluster": ["parallel.backend=dask", "parallel.n_jobs=2"],
+    # a LocalCluster inside the joblib launcher's loky workers: every job failed ("Nanny failed to
+    # start": the spawned nanny could not look up loky's start method)
+    "joblib_with_dask": [
+        "hydra/launcher=joblib",
+        "hydra.launcher.n_jobs=2",
+        "parallel.backend=dask",
+        "parallel.n_jobs=2",
+    ],
 }
 
 
@@ -113,4 +122,17 @@ def test_slurm_jobs_are_checked_before_submitting(tmp_path):
     err = proc.stderr.strip()
     assert "\n" not in err and "Traceback" not in err, err
     assert err.startswith("error: job 1 (") and "objective.w_d=2" in err, err
+    assert not any(p.is_file() for p in tmp_path.rglob("*"))
+
+
+@pytest.mark.skipif(shutil.which("srun") is not None, reason="this machine has SLURM")
+def test_slurm_without_slurm_is_one_line_and_writes_nothing(tmp_path):
+    """docs/pipeline.md's SLURM command on a machine without SLURM: one line naming the launcher
+    and what is allowed, nothing written (submitit raised a 39-line traceback after writing
+    multirun.yaml)."""
+    proc = sweep(tmp_path, ["hydra/launcher=submitit_slurm", "hydra.launcher.partition=YOUR_PARTITION"])
+    assert proc.returncode == 2, proc.stderr
+    err = proc.stderr.strip()
+    assert "\n" not in err and "Traceback" not in err, err
+    assert err.startswith("error: hydra/launcher=submitit_slurm is invalid here: no SLURM"), err
     assert not any(p.is_file() for p in tmp_path.rglob("*"))

@@ -190,14 +190,17 @@ def _checked_fixed(cls: type[Mechanism], given: dict[str, Any]) -> dict[str, Any
     """
     declared = {p.name: p for p in cls.fixed_parameters}
     keys = ", ".join(declared) or "none"
-    for name in given:
-        check(f"mechanism.fixed.{name}", given[name], name in declared, f"keys {keys} for {cls.name}")
+    # first the class's own defaults (its group option passes them as ``given``): a class that
+    # omits a declaration is named as such, not the user for an override never made
     for name in cls.default_fixed:
         if name not in declared:
             raise ConfigError(
-                f"mechanism.fixed.{name} is invalid: {cls.__name__} declares no range for it "
-                f"(kinematics.base.FixedParameter in fixed_parameters); allowed: keys {keys}"
+                f"mechanism={cls.name!r} is invalid: {cls.__name__}.default_fixed has {name!r} but "
+                f"fixed_parameters declares no kinematics.base.FixedParameter for it (its range and unit); "
+                f"allowed: a mechanism declaring each fixed parameter (docs/extending.md)"
             )
+    for name in given:
+        check(f"mechanism.fixed.{name}", given[name], name in declared, f"keys {keys} for {cls.name}")
     fixed = {**cls.default_fixed, **given}
     for name, value in fixed.items():
         p = declared[name]

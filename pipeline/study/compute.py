@@ -10,6 +10,7 @@ identity, failure states) is :mod:`pipeline.study.run`.
 from __future__ import annotations
 
 import logging
+import multiprocessing
 import time
 from contextlib import contextmanager
 from pathlib import Path
@@ -41,6 +42,14 @@ def parallel_backend(parallel):
         if parallel.scheduler_address:
             client, cluster = Client(parallel.scheduler_address, timeout=10), None
         else:
+            # in a loky worker (hydra/launcher=joblib runs each job in one) the start method is
+            # loky's own, which the nanny's spawned child cannot look up ("cannot find context for
+            # 'loky'": every job failed); the nanny's children are spawned either way
+            if multiprocessing.get_start_method(allow_none=True) not in (
+                None,
+                *multiprocessing.get_all_start_methods(),
+            ):
+                multiprocessing.set_start_method("spawn", force=True)
             cluster = LocalCluster(
                 n_workers=workers_for(parallel.n_jobs, parallel.n_jobs),
                 threads_per_worker=1,

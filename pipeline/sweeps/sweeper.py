@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import logging
 import os
+import shutil
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -59,6 +60,24 @@ class CheckedSweeperConf:
 def _fail(message: str, code: int = 2) -> None:
     print(f"error: {message}", file=sys.stderr)
     sys.exit(code)
+
+
+#: the commands a SLURM launcher runs (submitit submits with sbatch and detects the cluster by srun)
+SLURM_COMMANDS = ("sbatch", "srun")
+
+
+def check_launcher_here(config: DictConfig) -> None:
+    """The configured launcher can run on this machine: a SLURM launcher needs SLURM's commands.
+    Otherwise one ``error:`` line and exit 2, before the sweep folder exists (submitit raised a
+    traceback after ``multirun.yaml`` was written)."""
+    target = str(OmegaConf.select(config, "hydra.launcher._target_", default="") or "")
+    if target.endswith("SlurmLauncher"):
+        missing = [c for c in SLURM_COMMANDS if shutil.which(c) is None]
+        if missing:
+            _fail(
+                f"hydra/launcher=submitit_slurm is invalid here: no SLURM on this machine ({', '.join(missing)} "
+                f"not on PATH); allowed: a SLURM login node, or hydra/launcher=submitit_local, joblib or basic"
+            )
 
 
 def job_label(k: int, overrides: Sequence[str]) -> str:
@@ -110,6 +129,7 @@ class CheckedSweeper(Sweeper):
             except (HydraException, OmegaConfBaseException) as exc:
                 _fail(str(exc).strip().splitlines()[0])
             self.validate_batch_is_legal(jobs)  # all of them, before the first batch runs
+            check_launcher_here(self.config)
             sweep_dir.mkdir(parents=True, exist_ok=True)
             OmegaConf.save(self.config, sweep_dir / "multirun.yaml")
             returns: list[Sequence[JobReturn]] = []
