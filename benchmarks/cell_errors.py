@@ -83,19 +83,32 @@ def _captured_cut_cells(mech) -> dict:
     return seen
 
 
+def _captured_grid(mech) -> dict:
+    """:func:`_captured_cut_cells` of a mechanism this diagnosis supports (a grid of memberships);
+    SystemExit with one line for the others."""
+    seen = _captured_cut_cells(mech)
+    if "inside" not in seen:
+        raise SystemExit(f"{mech.name}: integrated by exact sections, no grid cells; not supported")
+    if seen["values"].exact is not None:
+        raise SystemExit(f"{mech.name}: an exact axis (cell fractions are lengths there); not supported")
+    return seen
+
+
+def _cut_nodes(seen: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The distances (d, nodes; cell widths) from every node to its nearest and its farther edge
+    crossing along each sampled axis (inf: none), and the cut nodes (flat indices, in the order
+    ``_boundary_corrected_sums`` takes them)."""
+    pairs = list(zip(seen["crossings"], seen["widths"]))
+    d = len(seen["sampled"])
+    near = np.stack([np.minimum(minus, plus) / w for (minus, plus, _, _), w in pairs]).reshape(d, -1)
+    far = np.stack([np.maximum(minus, plus) / w for (minus, plus, _, _), w in pairs]).reshape(d, -1)
+    return near, far, np.nonzero(np.isfinite(near).any(axis=0))[0]
+
+
 def _monte_carlo_fractions(seen: dict, nodes: np.ndarray, points: int, rng: np.random.Generator) -> np.ndarray:
     """Fraction (M,) of the cells of ``nodes`` (flat indices) inside the workspace, from
-    ``points`` uniform random points each."""
-    axes, sampled, inside, widths = seen["axes"], seen["sampled"], seen["inside"], seen["widths"]
-    index = np.unravel_index(nodes, inside.shape)
-    centres = np.column_stack([axes[j][index[j]] for j in range(inside.ndim)])
-    out = np.empty(nodes.size)
-    for start in range(0, nodes.size, BATCH):
-        poses = np.repeat(centres[start : start + BATCH], points, axis=0)
-        for j, width in zip(sampled, widths):
-            poses[:, j] += (rng.random(poses.shape[0]) - 0.5) * width
-        out[start : start + BATCH] = seen["values"](poses)[0].reshape(-1, points).mean(axis=1)
-    return out
+    ``points`` uniform random points each (:func:`_cell_points`)."""
+    return _cell_points(seen, nodes, points, rng)[1].mean(axis=1)
 
 
 def _cell_points(seen: dict, nodes: np.ndarray, points: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
@@ -188,14 +201,10 @@ def candidate(mech, points: int = 200, seed: int = 1) -> list[tuple[str, float, 
     the code's rule (its exact cut fractions: the row carries the Monte Carlo's noise, in its mean
     error per cell too), the same planes tested on those points, and the candidate "linear
     margins" on those points (these two rows differ without sampling noise)."""
-    seen = _captured_cut_cells(mech)
-    if "inside" not in seen or seen["values"].exact is not None:
-        raise SystemExit(f"{mech.name}: exact sections or an exact axis; not supported")
-    d = len(seen["sampled"])
-    pairs = list(zip(seen["crossings"], seen["widths"]))
-    near = np.stack([np.minimum(minus, plus) / w for (minus, plus, _, _), w in pairs]).reshape(d, -1)
-    toward = np.stack([np.where(plus <= minus, 1.0, -1.0) for (minus, plus, _, _), _ in pairs]).reshape(d, -1)
-    cut = np.nonzero(np.isfinite(near).any(axis=0))[0]
+    seen = _captured_grid(mech)
+    near, _, cut = _cut_nodes(seen)
+    toward = np.stack([np.where(plus <= minus, 1.0, -1.0) for minus, plus, _, _ in seen["crossings"]])
+    toward = toward.reshape(near.shape)
     is_in = seen["inside"].ravel()[cut]
     offsets, member = _cell_points(seen, cut, points, np.random.default_rng(seed))
     truth = member.mean(axis=1)
@@ -227,23 +236,15 @@ def candidate(mech, points: int = 200, seed: int = 1) -> list[tuple[str, float, 
 def breakdown(mech, points: int = 400, seed: int = 1) -> list[tuple[str, int, float]]:
     """Rows ``(kind of cell, cells, sum of (rule - Monte Carlo) in % of V)``, the last row
     the total with the Monte Carlo's standard error in its label."""
-    seen = _captured_cut_cells(mech)
-    if "inside" not in seen:
-        raise SystemExit(f"{mech.name}: integrated by exact sections, no grid cells; not supported")
+    seen = _captured_grid(mech)
     inside, sampled = seen["inside"], seen["sampled"]
-    if seen["values"].exact is not None:
-        raise SystemExit(f"{mech.name}: an exact axis (cell fractions are lengths there); not supported")
-    pairs = list(zip(seen["crossings"], seen["widths"]))
-    near = np.stack([np.minimum(minus, plus) / w for (minus, plus, _, _), w in pairs])
-    far = np.stack([np.maximum(minus, plus) / w for (minus, plus, _, _), w in pairs])
-    # the cut cells, in the order _boundary_corrected_sums takes them
-    cut = np.nonzero(np.isfinite(near.reshape(len(sampled), -1)).any(axis=0))[0]
+    _, far, cut = _cut_nodes(seen)
     is_in = inside.ravel()[cut]
     counted = np.where(is_in, seen["own"], 1.0 - seen["own"])
     rng = np.random.default_rng(seed)
     sampled_fraction = _monte_carlo_fractions(seen, cut, points, rng)
     diff = counted - sampled_fraction
-    slab = (far.reshape(len(sampled), -1)[:, cut] < 0.5).any(axis=0)
+    slab = (far[:, cut] < 0.5).any(axis=0)
     axes_cut = (seen["slopes"] > 0.0).sum(axis=1)
     membership = inside.astype(np.uint8)
     mixed = maximum_filter(membership, size=3, mode="nearest") != minimum_filter(membership, size=3, mode="nearest")
