@@ -32,13 +32,15 @@ from urllib.parse import quote
 
 import numpy as np
 import pandas as pd
+import pyarrow.parquet as pq
 from omegaconf import OmegaConf
 
 from kinematics import MECHANISMS
 from pipeline.config import study_hash
 from pipeline.errors import ConfigError, RunError
 from pipeline.report.figures import GROUP_KEYS, caption, convergence_figure, group_keys, workspace_gallery
-from pipeline.stages.plot import distinct_seeds, plot_tradeoff, symbol, with_study
+from pipeline.stages.dataset_build import with_run_ids
+from pipeline.stages.plot import debug_rows, distinct_seeds, plot_tradeoff, symbol, with_study
 from pipeline.store.dataset import DEFAULT_PURPOSES, read_dataset
 from pipeline.store.runs import MANIFEST, read_manifest
 
@@ -62,34 +64,19 @@ def load_sweep(source: Path) -> tuple[pd.DataFrame, pd.DataFrame, dict[str, Path
     """
     source = Path(source)
     if is_dataset(source):
-        purposes = DEFAULT_PURPOSES
-        with warnings.catch_warnings():  # an empty frame's warning: the report says so itself
-            warnings.simplefilter("ignore", UserWarning)
-            best = read_dataset(source, "best", purposes)
-        note = ""
-        if best.empty:  # nothing but quick looks: show them rather than nothing, and say so
-            purposes, note = None, "; debug runs only"
-            best = read_dataset(source, "best", purposes)
+        best, dirs, purposes = read_studies(source)
         history = read_dataset(source, "history", purposes)
-        runs = read_dataset(source, "runs", purposes)
-        dirs = {r: Path(s) for r, s in zip(runs["run_id"], runs["source"])}
-        note = f"dataset {source} ({len(runs)} runs{note or ', debug runs left out'})"
-        return fill_study_hashes(best, dirs), history, dirs, note
+        left_out = "; debug runs only" if purposes is None else ", debug runs left out"
+        return best, history, dirs, f"dataset {source} ({len(dirs)} runs{left_out})"
     frames_best, frames_history, dirs = [], [], {}
     for manifest_path in sorted(source.rglob(MANIFEST)):
         run = manifest_path.parent
         manifest = read_manifest(run)
         if not manifest or manifest.get("status") != "complete":
             continue
-        best = pd.read_parquet(run / "best.parquet")
-        history = pd.read_parquet(run / "history.parquet")
-        for frame in (best, history):
-            frame.insert(0, "run_id", manifest["run_id"])
-            frame.insert(1, "job", int(manifest["job"]))
-        best.insert(2, "study_hash", study_hash(manifest["config"]) if manifest.get("config") else "")
-        best.insert(3, "purpose", str((manifest.get("config") or {}).get("purpose", "study")))
-        frames_best.append(best)
-        frames_history.append(history)
+        # the run's ids (purpose, study_hash too) as the dataset would hold them
+        frames_best.append(with_run_ids(pq.read_table(run / "best.parquet"), manifest).to_pandas())
+        frames_history.append(with_run_ids(pq.read_table(run / "history.parquet"), manifest).to_pandas())
         dirs[manifest["run_id"]] = run
     if not frames_best:
         raise ConfigError(
@@ -99,11 +86,28 @@ def load_sweep(source: Path) -> tuple[pd.DataFrame, pd.DataFrame, dict[str, Path
     return (pd.concat(frames_best, ignore_index=True), pd.concat(frames_history, ignore_index=True), dirs, config)
 
 
+def read_studies(source: Path) -> tuple[pd.DataFrame, dict[str, Path], tuple[str, ...] | None]:
+    """(best, run directories by run id, the purposes kept) of a dataset: its debug runs left out
+    (:func:`pipeline.store.dataset.read_dataset`), unless it holds nothing else: then those, and
+    purposes None (a smoke test shows its runs rather than nothing, and says so). Each run's
+    ``study_hash`` filled where the dataset predates the column (:func:`fill_study_hashes`)."""
+    purposes: tuple[str, ...] | None = DEFAULT_PURPOSES
+    with warnings.catch_warnings():  # an empty frame's warning: the callers say so themselves
+        warnings.simplefilter("ignore", UserWarning)
+        best = read_dataset(source, "best", purposes)
+    if best.empty:
+        purposes = None
+        best = read_dataset(source, "best", purposes)
+    runs = read_dataset(source, "runs", purposes)
+    dirs = {r: Path(s) for r, s in zip(runs["run_id"], runs["source"])}
+    return fill_study_hashes(best, dirs), dirs, purposes
+
+
 def debug_note(best: pd.DataFrame) -> str:
     """A visible line above everything where any run is a debug run (``purpose``), else ""."""
-    if "purpose" not in best or not (best["purpose"].astype(str) == "debug").any():
+    count = int(debug_rows(best).sum())
+    if not count:
         return ""
-    count = int((best["purpose"].astype(str) == "debug").sum())
     return (
         f'<p class="note"><strong>{count} of {len(best)} runs are debug runs</strong> (+debug presets, '
         "tiny sizes): a smoke test, not results.</p>\n"

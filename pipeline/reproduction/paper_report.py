@@ -28,11 +28,10 @@ import numpy as np
 import pandas as pd
 
 from pipeline.errors import ConfigError
-from pipeline.report.html import fill_study_hashes
+from pipeline.report.html import read_studies
 from pipeline.report.tables import rel, table
 from pipeline.reproduction.papers import load_paper, paper_names
 from pipeline.stages.plot import distinct_seeds, study_labels, with_study
-from pipeline.store.dataset import read_dataset
 from pipeline.store.parquet import PARAM_UNITS
 
 #: printed quantity -> dataset column (design quantities: :func:`_design_column`)
@@ -110,13 +109,10 @@ def report(dataset: Path, paper_name: str) -> str:
         raise ConfigError(
             f"dataset={str(dataset)!r} is invalid: allowed a dataset directory (holding best/, written by aggregation)"
         )
-    best = read_dataset(dataset, "best", purposes=None)
-    runs = read_dataset(dataset, "runs", purposes=None)
-    best = fill_study_hashes(best, {r: Path(s) for r, s in zip(runs["run_id"], runs["source"])})
-    studies = best[best["purpose"].astype(str) != "debug"] if "purpose" in best else best
+    best, _, purposes = read_studies(dataset)
     # a dataset of debug runs only (a smoke test of this report): compared, and said so
-    smoke = studies.empty and not best.empty
-    rows = compare(distinct_seeds(best if smoke else studies, ["mechanism", "objective", "w_d", "optimizer"]), paper)
+    smoke = purposes is None and not best.empty
+    rows = compare(distinct_seeds(best, ["mechanism", "objective", "w_d", "optimizer"]), paper)
     return (
         f"# {paper_name}: the paper's tables beside {dataset}\n\n"
         + ("**Debug runs only** (`+debug`, tiny sizes): a smoke test of this report, not results.\n\n" if smoke else "")

@@ -244,6 +244,13 @@ def plot_front(
     return _save(fig, path, plot)
 
 
+def debug_rows(frame: pd.DataFrame) -> pd.Series:
+    """Which rows are debug runs (``purpose``; none where the table has no such column)."""
+    if "purpose" not in frame:
+        return pd.Series(False, index=frame.index)
+    return frame["purpose"].astype(str) == "debug"
+
+
 def with_study(best: pd.DataFrame) -> pd.DataFrame:
     """``best`` with a ``study_hash`` column ("" where the dataset predates it or a row has none):
     the key that keeps apart studies run under one experiment name with different overrides."""
@@ -329,9 +336,8 @@ def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
         if len(part):
             spread = "mean and range over the seeds of each line" if most_seeds > 1 else "one seed per point"
             spread += "; bars: η's error"
-            debug = "purpose" in part and (part["purpose"].astype(str) == "debug").any()
             title = f"{name}: GDI, SURI, η of the optima vs $w_d$\n({spread})"
-            set_title(ax, f"{DEBUG_RUNS_MARK}\n{title}" if debug else title, 10, width=4.0)
+            set_title(ax, f"{DEBUG_RUNS_MARK}\n{title}" if debug_rows(part).any() else title, 10, width=4.0)
             styles = [
                 Line2D([], [], color="0.3", marker=marker, ls=style, ms=4, label=label)
                 for _, label, marker, style in TRADEOFF_QUANTITIES
