@@ -27,7 +27,13 @@ the node, its central difference between the neighbouring nodes (one-sided where
 undefined), and, along an axis whose edge crossing that margin places, the secant through
 that crossing. The cell's inside part is the intersection of their half-spaces: an edge where
 two constraint surfaces meet, and a slab between two of them, keep their shape, which one plane
-per node cannot (docs/accuracy.md, "Order").
+per node cannot (docs/accuracy.md, "Order"). A last row gives the exact part of each cut cell
+under that rule (:func:`kinematics.polytope.clipped_cell`) against the same points.
+
+``--volume [RESOLUTION ...]`` measures the rule over the whole grid instead, at the default and at
+the given resolutions, against the 4x reference of ``benchmarks.accuracy`` (no Monte Carlo):
+the code's V and GDI errors, the linear margins' (:func:`volume_errors`), and their V without
+the crossings' secants.
 """
 
 from __future__ import annotations
@@ -37,16 +43,17 @@ import argparse
 import numpy as np
 from scipy.ndimage import maximum_filter, minimum_filter
 
-from benchmarks.accuracy import SCAN, SCAN_SEED, designs, random_designs
+from benchmarks.accuracy import METHODS, REFERENCE_FACTOR, SCAN, SCAN_SEED, designs, random_designs
 from kinematics import MECHANISMS, kernels
 from kinematics import workspace as ws
+from kinematics.polytope import clipped_cell
 from kinematics.workspace import _grid_poses
 
 #: cells per call of the membership test
 BATCH = 500
 
 
-def _captured_cut_cells(mech) -> dict:
+def _captured_cut_cells(mech, resolution: int | None = None) -> dict:
     """Run ``evaluate(mech)`` on the numpy path and keep what its cut cells were made of: the
     grid (``values``, ``axes``, ``box``, ``sampled``, ``inside``), the crossings per axis
     (:func:`kinematics.workspace._edge_crossings`) and the cut cells' node-side fractions
@@ -76,17 +83,17 @@ def _captured_cut_cells(mech) -> dict:
     try:
         ws._boundary_corrected_sums, ws._edge_crossings, ws._faded_cube_fraction = sums, crossings, fraction
         with kernels.reference_kernels():
-            seen["evaluation"] = ws.evaluate(mech, error_estimate=False)
+            seen["evaluation"] = ws.evaluate(mech, resolution=resolution, error_estimate=False)
     finally:
         for name, function in wrapped.items():
             setattr(ws, name, function)
     return seen
 
 
-def _captured_grid(mech) -> dict:
+def _captured_grid(mech, resolution: int | None = None) -> dict:
     """:func:`_captured_cut_cells` of a mechanism this diagnosis supports (a grid of memberships);
     SystemExit with one line for the others."""
-    seen = _captured_cut_cells(mech)
+    seen = _captured_cut_cells(mech, resolution)
     if "inside" not in seen:
         raise SystemExit(f"{mech.name}: integrated by exact sections, no grid cells; not supported")
     if seen["values"].exact is not None:
@@ -151,13 +158,14 @@ def _differences(margins: np.ndarray, j: int) -> np.ndarray:
     return np.where(both, 0.5 * (ahead + behind), one)
 
 
-def linear_margin_inside(seen: dict, nodes: np.ndarray, offsets: np.ndarray) -> np.ndarray:
-    """Membership (M, points) of the points ``offsets`` (M, points, d; cell widths from the node)
-    of the cells of ``nodes`` (flat indices) under the candidate rule "linear margins" (module
-    docstring): every margin ``m_c(node) + g_c . offset >= 0``. A margin undefined at the node
-    (an angle where the inverse kinematics has no solution) is extrapolated from a neighbour where
-    it is defined; the slope along an axis is the secant through the edge crossing of that axis
-    whose margin is nearest 0 there (for each side's crossing within the edge)."""
+def linear_margins(seen: dict, nodes: np.ndarray, secant: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """The candidate rule "linear margins" (module docstring) in the cells of ``nodes`` (flat
+    indices): each margin's value at the node (M, K + 1) and its change per cell width along the
+    sampled axes (M, K + 1, d), NaN where unknown. A margin undefined at the node (an angle where
+    the inverse kinematics has no solution) is extrapolated from a neighbour where it is defined;
+    the slope along an axis is the secant through the edge crossing of that axis whose margin is
+    nearest 0 there (for each side's crossing within the edge; ``secant=False``: the differences
+    alone, no crossings, so no looks between the nodes)."""
     inside, sampled, axes, widths, values = (seen[k] for k in ("inside", "sampled", "axes", "widths", "values"))
     shape, d = inside.shape, len(sampled)
     grid = _node_margins(seen)
@@ -177,7 +185,7 @@ def linear_margin_inside(seen: dict, nodes: np.ndarray, offsets: np.ndarray) -> 
             rows, margin, there = rows[known], margin[known], there[known]
             at[rows, margin] = grid[there, margin] - step * slopes[there, margin, k]
             slope[rows, margin] = slopes[there, margin]
-    for k, j in enumerate(sampled):  # the secant through each edge crossing, for the margin it belongs to
+    for k, j in enumerate(sampled if secant else []):  # the secant through each edge crossing, for its margin
         for crossings, sign in ((seen["crossings"][k][1], 1.0), (seen["crossings"][k][0], -1.0)):
             distance = crossings.ravel()[nodes] / widths[k]
             rows = np.nonzero(np.isfinite(distance) & (distance > 1e-9))[0]
@@ -191,6 +199,14 @@ def linear_margin_inside(seen: dict, nodes: np.ndarray, offsets: np.ndarray) -> 
             defined = np.isfinite(at[rows, margin])
             rows, margin = rows[defined], margin[defined]
             slope[rows, margin, k] = -at[rows, margin] / (sign * distance[rows])
+    return at, slope
+
+
+def linear_margin_inside(seen: dict, nodes: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """Membership (M, points) of the points ``offsets`` (M, points, d; cell widths from the node)
+    of the cells of ``nodes`` (flat indices) under :func:`linear_margins`: every margin
+    ``m_c(node) + g_c . offset >= 0`` (an unknown one holds)."""
+    at, slope = linear_margins(seen, nodes)
     linear = at[:, None, :] + np.einsum("mpd,mkd->mpk", offsets, slope)
     return np.where(np.isfinite(linear), linear >= 0.0, True).all(axis=2)
 
@@ -217,6 +233,8 @@ def candidate(mech, points: int = 200, seed: int = 1) -> list[tuple[str, float, 
         "plane through the nearest crossings (the code)": np.where(is_in, seen["own"], 1.0 - seen["own"]),
         "the same planes on the points (no fading)": np.where(is_in[:, None], node_side, ~node_side).mean(axis=1),
         "linear margins (candidate, not in the code)": linear_margin_inside(seen, cut, offsets).mean(axis=1),
+        # the same rule's exact part of each cell: its row carries the Monte Carlo's noise
+        "linear margins, exact part (kinematics.polytope)": clipped_cell(*linear_margins(seen, cut))[0],
     }
     rows = []
     for rule, counted in rules.items():
@@ -230,6 +248,78 @@ def candidate(mech, points: int = 200, seed: int = 1) -> list[tuple[str, float, 
                 float(np.abs(diff).mean()),
             )
         )
+    return rows
+
+
+def _cell_means(values: np.ndarray, inside: np.ndarray, sampled: list[int]) -> np.ndarray:
+    """Each inside node's cell mean of an integrand given at the nodes (grid shape): the node's
+    value plus ``1/24`` of its second difference along each sampled axis whose two neighbours
+    are inside (the mean of a parabola over a cell of width 1 is its centre value plus
+    ``f''/24``; where a neighbour is outside, the node's value alone)."""
+    known = np.where(inside, values, np.nan)
+    mean = known.copy()
+    for j in sampled:
+        second = np.full(known.shape, np.nan)
+        middle, ahead, behind = ([slice(None)] * known.ndim for _ in range(3))
+        middle[j], ahead[j], behind[j] = slice(1, -1), slice(2, None), slice(0, -2)
+        second[tuple(middle)] = known[tuple(ahead)] + known[tuple(behind)] - 2.0 * known[tuple(middle)]
+        mean += np.where(np.isfinite(second), second, 0.0) / 24.0
+    return np.where(inside, mean, 0.0)
+
+
+def volume_errors(mech, resolutions: list[int | None]) -> list[tuple]:
+    """Rows ``(resolution, nodes, code's V, GDI errors, linear margins' V, GDI errors, V error
+    without the crossings' secants)`` in % of the reference (the code at
+    :data:`benchmarks.accuracy.REFERENCE_FACTOR` x the finer default, as the scan of
+    ``benchmarks.accuracy``).
+
+    The linear margins' V is the whole grid's: every node whose 26 neighbours share its
+    membership counts its cell whole or not at all; every other node (the cut cells and the
+    uncut cells whose corner the boundary may reach) counts the exact part of its cell where
+    its linear margins hold (:func:`linear_margins`, :func:`kinematics.polytope.clipped_cell`).
+    Its GDI takes 1/kappa of such a part at the part's centroid, from the linear dexterity
+    margin ``1/kappa^2 - limit^2`` there, and of a whole cell its mean by :func:`_cell_means`
+    (1/kappa falls like a root towards a singular boundary: the node's value alone, the
+    midpoint rule, erred by +0.085 % of the GDI on Delta scan 0 with every boundary part exact
+    by Monte Carlo, and by +0.008 % with the second differences). No Monte Carlo: the errors
+    are the rules' own."""
+    r0 = max(ws.default_resolution(mech, method=method) for method in METHODS)  # as benchmarks.accuracy's scan
+    reference = ws.evaluate(mech, resolution=REFERENCE_FACTOR * r0, error_estimate=False)
+    rows = []
+    for resolution in resolutions:
+        seen = _captured_grid(mech, resolution)
+        inside = seen["inside"]
+        membership = inside.astype(np.uint8)
+        band = np.nonzero(
+            (
+                maximum_filter(membership, size=3, mode="nearest") != minimum_filter(membership, size=3, mode="nearest")
+            ).ravel()
+        )[0]
+        poses = _grid_poses(seen["axes"], 0, inside.size)
+        ic = np.where(inside.ravel(), seen["values"](poses)[2], 0.0)
+        whole = inside.ravel().copy()
+        whole[band] = False
+        means = _cell_means(ic.reshape(inside.shape), inside, seen["sampled"]).ravel()
+        code = seen["evaluation"]
+        per_cell = code.volume / float(seen["sums"][0])  # V of one cell of this grid
+        row = [
+            "default" if resolution is None else str(resolution),
+            int(inside.size),
+            100 * (code.volume / reference.volume - 1),
+            100 * (code.gdi / reference.gdi - 1),
+        ]
+        for secant in (True, False):
+            at, slope = linear_margins(seen, band, secant)
+            fraction, centroid = clipped_cell(at, slope)
+            cells = float(whole.sum()) + float(fraction.sum())
+            row.append(100 * (cells * per_cell / reference.volume - 1))
+            if secant:
+                dexterity = at[:, -1] + np.einsum("md,md->m", slope[:, -1, :], centroid)
+                at_centroid = np.sqrt(np.maximum(dexterity + seen["values"].min_ic ** 2, 0.0))
+                part = np.where(np.isfinite(dexterity), at_centroid, ic[band])
+                gdi = (float(means[whole].sum()) + float((fraction * part).sum())) / cells
+                row.append(100 * (gdi / reference.gdi - 1))
+        rows.append(tuple(row))
     return rows
 
 
@@ -284,6 +374,14 @@ def main() -> None:
     parser.add_argument("design", help='"paper", "optimum k", "random k" or "scan k" (benchmarks.accuracy)')
     parser.add_argument("--points", type=int, default=400)
     parser.add_argument("--candidate", action="store_true", help="also measure the candidate rule (linear margins)")
+    parser.add_argument(
+        "--volume",
+        type=int,
+        nargs="*",
+        metavar="RESOLUTION",
+        help="the whole V of the code and of the linear margins against the 4x reference, at the default "
+        "and at these resolutions (nodes per axis)",
+    )
     args = parser.parse_args()
     if args.mechanism not in MECHANISMS:
         parser.error(f"mechanism={args.mechanism!r} is invalid: allowed {', '.join(sorted(MECHANISMS))}")
@@ -292,6 +390,16 @@ def main() -> None:
     pool = dict(designs(args.mechanism)) | dict(random_designs(args.mechanism, SCAN_SEED, SCAN, "scan"))
     if args.design not in pool:
         parser.error(f"design={args.design!r} is invalid: allowed {', '.join(pool)}")
+    if args.volume is not None:
+        if any(r < 4 for r in args.volume):
+            parser.error(f"--volume={args.volume} is invalid: allowed resolutions >= 4")
+        print(f"{args.mechanism}, {args.design}: V, GDI errors against the 4x reference, %")
+        for label, nodes, *errors in volume_errors(pool[args.design], [None, *args.volume]):
+            print(
+                f"  resolution {label:8s} {nodes:8d} nodes  code {errors[0]:+.4f} {errors[1]:+.4f}  "
+                f"linear margins {errors[2]:+.4f} {errors[3]:+.4f}  without secants V {errors[4]:+.4f}"
+            )
+        return
     rows = breakdown(pool[args.design], args.points)
     print(f"{args.mechanism}, {args.design}: rule minus Monte Carlo ({args.points} points a cell), % of V")
     for label, count, percent in rows:

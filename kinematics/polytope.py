@@ -1,0 +1,246 @@
+"""The part of a grid cell where several linear margins are non-negative: its volume and centroid.
+
+A cell is the cube ``[-1/2, 1/2]^d`` in cell units ``u`` (d = 1, 2 or 3 sampled axes, each
+coordinate the offset from the cell's node divided by the cell width along that axis). Margin k
+is modelled as linear over the cell, ``m_k(u) = level_k + gradient_k . u`` (its value at the
+node and its change per cell width), and the cell's inside part is the intersection of the
+half-spaces ``m_k >= 0``: a convex polytope. This module computes its volume fraction and
+centroid exactly (to rounding), so both are continuous in the levels and gradients: a margin
+whose zero moves across the cell moves the fraction smoothly, with no step where it crosses the
+node.
+
+This is the "linear margins" rule of docs/accuracy.md ("Order"), measured by
+``python -m benchmarks.cell_errors MECH DESIGN --candidate``; it is not yet the rule of
+:func:`kinematics.workspace.evaluate`. Unlike one plane per cell, an edge where two constraint
+surfaces meet, a corner and a slab keep their shape.
+
+Method: the cube as a list of convex faces, clipped by each margin's plane in turn
+(Sutherland-Hodgman on every face; the points where the plane cuts the faces, sorted by angle
+about their mean, close the polytope with a new face); then the volume and centroid as the sum
+of the tetrahedra from an inside point to each face's fan of triangles. Planes that miss the
+cell are skipped; one that leaves nothing of it ends the cell at fraction 0. Cells of 1 or 2
+axes are the prism of unit height over them (volume = length or area).
+
+Compiled only (numba), like :func:`kinematics.annuli.annuli_x_sections`: a clipper has no
+vectorised numpy twin; ``tests/test_polytope.py`` checks it against inclusion-exclusion for one
+plane, Monte Carlo for several, and symmetry. Cost (measured on this 2-core machine, noisy):
+about 0.1 us a cell whose margins all miss it and 0.5-0.8 us per margin that cuts it (most of it
+the clipping's branches and the new face's angles), so a rule built on it wants the cut cells
+only.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from kinematics import kernels
+
+
+@kernels.jit
+def _clip(faces, counts, n_faces, normal, level, points, scratch, angle):
+    """Clip the polytope ``faces[:n_faces]`` (each ``counts[f]`` vertices (.., 3), in order)
+    by ``level + normal . u >= 0`` in place; returns the new number of faces. ``points``
+    (.., 3), ``scratch`` (.., 3) and ``angle`` (..,) are work space."""
+    n_points = 0
+    kept = 0
+    side = angle  # the plane's value at each vertex of a face (angle is free until the new face)
+    for f in range(n_faces):
+        m = counts[f]
+        for i in range(m):
+            side[i] = level + normal[0] * faces[f, i, 0] + normal[1] * faces[f, i, 1] + normal[2] * faces[f, i, 2]
+        out = 0
+        for i in range(m):
+            j = i + 1 if i + 1 < m else 0
+            sa, sb = side[i], side[j]
+            a0, a1, a2 = faces[f, i, 0], faces[f, i, 1], faces[f, i, 2]
+            if sa >= 0.0:
+                scratch[out, 0], scratch[out, 1], scratch[out, 2] = a0, a1, a2
+                out += 1
+            if (sa >= 0.0) != (sb >= 0.0):
+                t = sa / (sa - sb)
+                x0 = a0 + t * (faces[f, j, 0] - a0)
+                x1 = a1 + t * (faces[f, j, 1] - a1)
+                x2 = a2 + t * (faces[f, j, 2] - a2)
+                scratch[out, 0], scratch[out, 1], scratch[out, 2] = x0, x1, x2
+                out += 1
+                points[n_points, 0], points[n_points, 1], points[n_points, 2] = x0, x1, x2
+                n_points += 1
+        if out >= 3:
+            for i in range(out):
+                faces[kept, i, 0], faces[kept, i, 1], faces[kept, i, 2] = scratch[i, 0], scratch[i, 1], scratch[i, 2]
+            counts[kept] = out
+            kept += 1
+    if n_points >= 3 and kept > 0:
+        # the new face on the plane: its points in the order of their angle about their mean
+        c0 = c1 = c2 = 0.0
+        for i in range(n_points):
+            c0 += points[i, 0]
+            c1 += points[i, 1]
+            c2 += points[i, 2]
+        c0, c1, c2 = c0 / n_points, c1 / n_points, c2 / n_points
+        # two directions in the plane: p = normal x the axis of normal's smallest component, q = normal x p
+        small = 0
+        for k in range(1, 3):
+            if abs(normal[k]) < abs(normal[small]):
+                small = k
+        if small == 0:
+            p0, p1, p2 = 0.0, normal[2], -normal[1]
+        elif small == 1:
+            p0, p1, p2 = -normal[2], 0.0, normal[0]
+        else:
+            p0, p1, p2 = normal[1], -normal[0], 0.0
+        q0 = normal[1] * p2 - normal[2] * p1
+        q1 = normal[2] * p0 - normal[0] * p2
+        q2 = normal[0] * p1 - normal[1] * p0
+        for i in range(n_points):  # insertion sort by angle (a few points), into the new face
+            d0, d1, d2 = points[i, 0] - c0, points[i, 1] - c1, points[i, 2] - c2
+            key = math.atan2(d0 * q0 + d1 * q1 + d2 * q2, d0 * p0 + d1 * p1 + d2 * p2)
+            j = i
+            while j > 0 and angle[j - 1] > key:
+                angle[j] = angle[j - 1]
+                faces[kept, j, 0], faces[kept, j, 1], faces[kept, j, 2] = (
+                    faces[kept, j - 1, 0],
+                    faces[kept, j - 1, 1],
+                    faces[kept, j - 1, 2],
+                )
+                j -= 1
+            angle[j] = key
+            faces[kept, j, 0], faces[kept, j, 1], faces[kept, j, 2] = points[i, 0], points[i, 1], points[i, 2]
+        counts[kept] = n_points
+        kept += 1
+    return kept
+
+
+@kernels.jit
+def _clipped_cells(level, gradient, fraction, centroid):
+    """Fill ``fraction`` (M,) and ``centroid`` (M, d) of the cells (see :func:`clipped_cell`)."""
+    m, n_margins, d = gradient.shape
+    size = 6 + n_margins  # faces of the polytope, and vertices of one face, at most
+    faces = np.empty((size, 2 * size, 3))
+    counts = np.empty(size, dtype=np.int64)
+    points = np.empty((2 * size, 3))
+    scratch = np.empty((2 * size, 3))
+    angle = np.empty(2 * size)
+    normal = np.zeros(3)
+    cube = np.empty((6, 4, 3))  # 6 faces of 4 corners, each in order around its face
+    for axis in range(3):
+        for s in range(2):
+            b, c = (axis + 1) % 3, (axis + 2) % 3
+            for i in range(4):
+                cube[2 * axis + s, i, axis] = s - 0.5
+                cube[2 * axis + s, i, b] = -0.5 if i == 0 or i == 3 else 0.5
+                cube[2 * axis + s, i, c] = -0.5 if i < 2 else 0.5
+    for cell in range(m):
+        empty = False
+        n_faces = 0
+        for k in range(n_margins):
+            a = level[cell, k]
+            if not np.isfinite(a):
+                continue
+            spread = 0.0
+            finite = True
+            for j in range(d):
+                g = gradient[cell, k, j]
+                if not np.isfinite(g):
+                    finite = False
+                spread += 0.5 * abs(g)
+            if not finite:
+                continue
+            if a - spread >= 0.0:
+                continue  # the whole cell satisfies it
+            if a + spread <= 0.0:
+                empty = True  # nothing of the cell does (at most a face)
+                break
+            if n_faces == 0:  # the cube
+                n_faces = 6
+                faces[:6, :4, :] = cube
+                counts[:6] = 4
+            for j in range(3):
+                normal[j] = gradient[cell, k, j] if j < d else 0.0
+            n_faces = _clip(faces, counts, n_faces, normal, a, points, scratch, angle)
+            if n_faces == 0:
+                empty = True
+                break
+        if empty:
+            fraction[cell] = 0.0
+            for j in range(d):
+                centroid[cell, j] = 0.0
+            continue
+        if n_faces == 0:
+            fraction[cell] = 1.0
+            for j in range(d):
+                centroid[cell, j] = 0.0
+            continue
+        # an inside point: the mean of the vertices; tetrahedra to each face's fan
+        r0 = r1 = r2 = 0.0
+        total = 0
+        for f in range(n_faces):
+            for i in range(counts[f]):
+                r0 += faces[f, i, 0]
+                r1 += faces[f, i, 1]
+                r2 += faces[f, i, 2]
+            total += counts[f]
+        r0, r1, r2 = r0 / total, r1 / total, r2 / total
+        volume = 0.0
+        s0 = s1 = s2 = 0.0
+        for f in range(n_faces):
+            a0, a1, a2 = faces[f, 0, 0] - r0, faces[f, 0, 1] - r1, faces[f, 0, 2] - r2
+            for i in range(1, counts[f] - 1):
+                b0, b1, b2 = faces[f, i, 0] - r0, faces[f, i, 1] - r1, faces[f, i, 2] - r2
+                c0, c1, c2 = faces[f, i + 1, 0] - r0, faces[f, i + 1, 1] - r1, faces[f, i + 1, 2] - r2
+                v = abs(a0 * (b1 * c2 - b2 * c1) - a1 * (b0 * c2 - b2 * c0) + a2 * (b0 * c1 - b1 * c0)) / 6.0
+                volume += v
+                s0 += v * (a0 + b0 + c0) / 4.0
+                s1 += v * (a1 + b1 + c1) / 4.0
+                s2 += v * (a2 + b2 + c2) / 4.0
+        fraction[cell] = min(volume, 1.0)
+        if volume > 0.0:
+            moment = (s0, s1, s2)
+            shift = (r0, r1, r2)
+            for j in range(d):
+                centroid[cell, j] = moment[j] / volume + shift[j]
+        else:
+            for j in range(d):
+                centroid[cell, j] = 0.0
+
+
+def clipped_cell(level: np.ndarray, gradient: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Volume fraction and centroid of ``{u in [-1/2, 1/2]^d : level_k + gradient_k . u >= 0
+    for every margin k}``: the inside part of a grid cell under linear margins.
+
+    Parameters
+    ----------
+    level : ndarray, shape (M, K)
+        Each margin's value at the cell's node (the cube's centre), in the margin's own unit.
+        NaN: the margin is not modelled in that cell (it does not cut it).
+    gradient : ndarray, shape (M, K, d)
+        Each margin's change per cell width along each of the cell's d = 1, 2 or 3 axes, same
+        unit. A non-finite entry leaves that margin out of that cell.
+
+    Returns
+    -------
+    fraction : ndarray, shape (M,)
+        The inside part's volume over the cell's, in [0, 1].
+    centroid : ndarray, shape (M, d)
+        The inside part's centroid in cell units from the node (0 where the part is empty).
+
+    Raises
+    ------
+    ValueError
+        If the shapes do not match or d is not 1, 2 or 3.
+    """
+    level = np.ascontiguousarray(level, dtype=float)
+    gradient = np.ascontiguousarray(gradient, dtype=float)
+    if level.ndim != 2 or gradient.ndim != 3 or gradient.shape[:2] != level.shape:
+        raise ValueError(
+            f"clipped_cell: level must be (M, K) and gradient (M, K, d); got {level.shape} and {gradient.shape}"
+        )
+    d = gradient.shape[2]
+    if d not in (1, 2, 3):
+        raise ValueError(f"clipped_cell: the cell has d = {d} axes; allowed 1, 2 or 3")
+    fraction = np.empty(level.shape[0])
+    centroid = np.empty((level.shape[0], d))
+    _clipped_cells(level, gradient, fraction, centroid)
+    return fraction, centroid

@@ -1,0 +1,112 @@
+"""kinematics.polytope.clipped_cell: the cell's part where linear margins hold, against
+independent numbers (inclusion-exclusion for one plane, Monte Carlo for several) and
+properties that hold for any input (mirror symmetry, continuity, margins that miss)."""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+
+from kinematics.polytope import clipped_cell
+
+
+def half_space_in_cube(level: float, gradient: np.ndarray) -> float:
+    """Volume of ``{u in [-1/2, 1/2]^d : level + gradient . u >= 0}`` by inclusion-exclusion,
+    every gradient component non-zero: in ``t = u + 1/2`` flipped to ``c = |gradient| > 0``
+    the part is ``{c . t >= B}``, the cube minus ``{c . t < B}``."""
+    c = np.abs(gradient)
+    d = c.size
+    # level + g.u >= 0 with u_j = s_j (t_j - 1/2), s_j = sign(g_j):  c.t >= c.sum()/2 - level
+    bound = c.sum() / 2 - level
+    below = sum(
+        (-1) ** sum(v) * max(bound - c @ np.array(v, dtype=float), 0.0) ** d
+        for v in itertools.product((0, 1), repeat=d)
+    ) / (math.factorial(d) * np.prod(c))
+    return 1.0 - below
+
+
+@pytest.mark.parametrize("d", [1, 2, 3])
+def test_one_plane_agrees_with_inclusion_exclusion(d: int) -> None:
+    rng = np.random.default_rng(d)
+    gradient = rng.uniform(0.2, 3.0, (200, 1, d)) * rng.choice([-1.0, 1.0], (200, 1, d))
+    level = rng.uniform(-1.0, 1.0, (200, 1)) * np.abs(gradient).sum(axis=2) / 2
+    fraction, _ = clipped_cell(level, gradient)
+    expected = [half_space_in_cube(level[i, 0], gradient[i, 0]) for i in range(200)]
+    np.testing.assert_allclose(fraction, expected, atol=1e-12)
+    assert 0.0 < fraction.min() < 0.2 and 0.8 < fraction.max() < 1.0  # the planes cut the cells, thin to full
+
+
+@pytest.mark.parametrize("d", [2, 3])
+def test_several_planes_agree_with_monte_carlo(d: int) -> None:
+    rng = np.random.default_rng(10 + d)
+    cells, margins, samples = 12, 4, 200_000
+    gradient = rng.normal(0.0, 1.5, (cells, margins, d))
+    level = rng.uniform(0.0, 0.8, (cells, margins))
+    fraction, centroid = clipped_cell(level, gradient)
+    points = rng.uniform(-0.5, 0.5, (samples, d))
+    for i in range(cells):
+        inside = (level[i] + points @ gradient[i].T >= 0).all(axis=1)
+        share = inside.mean()
+        error = 4.5 * math.sqrt(max(share * (1 - share), 1e-6) / samples)
+        assert abs(fraction[i] - share) < error, (i, fraction[i], share)
+        if inside.sum() > 1000:
+            spread = 4.5 * points[inside].std(axis=0) / math.sqrt(inside.sum())
+            assert np.all(np.abs(centroid[i] - points[inside].mean(axis=0)) < spread), i
+    assert 0.0 < fraction.min() and fraction.max() < 0.9  # several planes cut every cell
+
+
+def test_mirror_symmetry_flips_the_centroid() -> None:
+    rng = np.random.default_rng(3)
+    gradient = rng.normal(0.0, 2.0, (50, 3, 3))
+    level = rng.uniform(-0.2, 0.8, (50, 3))
+    fraction, centroid = clipped_cell(level, gradient)
+    for axis in range(3):
+        flipped = gradient.copy()
+        flipped[:, :, axis] *= -1
+        mirrored_fraction, mirrored = clipped_cell(level, flipped)
+        np.testing.assert_allclose(mirrored_fraction, fraction, atol=1e-13)
+        expected = centroid.copy()
+        expected[:, axis] *= -1
+        np.testing.assert_allclose(mirrored, expected, atol=1e-12)
+
+
+def test_the_fraction_is_continuous_as_a_margin_sweeps_the_cell() -> None:
+    """No step as the zero of a margin crosses the node, a face or a corner: along a fine sweep
+    of the level every change is within the largest possible slope times the step."""
+    gradient = np.array([[[1.0, 0.7, 0.3], [-0.4, 1.1, 0.0]]])
+    levels = np.linspace(-1.2, 1.2, 4001)
+    rows = np.repeat(gradient, levels.size, axis=0)
+    level = np.column_stack([levels, np.full(levels.size, 0.3)])
+    fraction, centroid = clipped_cell(level, rows)
+    step = np.abs(np.diff(fraction)).max()
+    # the fraction's derivative in the level is the cut's area over |gradient|: at most sqrt(3)/1.25
+    assert step <= (levels[1] - levels[0]) * math.sqrt(3) / np.linalg.norm(gradient[0, 0]) + 1e-12
+    assert np.all(np.diff(fraction) >= -1e-15)  # more level, more cell
+    assert fraction[0] == 0.0 and 0.0 < fraction[-1] < 1.0  # the second margin still cuts
+    full = fraction > 1e-3  # the centroid of an empty part is 0 by convention, of a sliver its corner
+    assert np.abs(np.diff(centroid[full], axis=0)).max() < 0.01
+
+
+def test_margins_that_miss_or_are_unknown_leave_the_cell_alone() -> None:
+    level = np.array([[5.0, np.nan], [-5.0, 1.0], [0.2, np.nan], [0.2, 0.0]])
+    gradient = np.array(
+        [
+            [[1.0, 1.0], [1.0, 0.0]],  # far above 0 across the cell; unknown
+            [[1.0, 1.0], [0.0, 0.0]],  # below 0 across the cell: nothing
+            [[1.0, 0.0], [1.0, 1.0]],  # one cut, one unknown
+            [[1.0, 0.0], [np.nan, 1.0]],  # one cut, one with an unknown slope
+        ]
+    )
+    fraction, centroid = clipped_cell(level, gradient)
+    np.testing.assert_allclose(fraction, [1.0, 0.0, 0.7, 0.7], atol=1e-14)
+    np.testing.assert_allclose(centroid[2:], [[0.15, 0.0], [0.15, 0.0]], atol=1e-14)
+
+
+def test_shapes_are_checked() -> None:
+    with pytest.raises(ValueError, match=r"level must be \(M, K\)"):
+        clipped_cell(np.zeros((3, 2)), np.zeros((3, 1, 2)))
+    with pytest.raises(ValueError, match="allowed 1, 2 or 3"):
+        clipped_cell(np.zeros((3, 2)), np.zeros((3, 2, 4)))
