@@ -58,7 +58,7 @@ def test_compare_groups_by_objective_w_d_and_optimiser():
     by = {(r[0], r[1], r[3]): r for r in rows}
     ga_v = by[("Table 3 (w_d = 0.5)", "ga", "V")]
     assert ga_v[2] == 2 and ga_v[4] == 11304.0
-    assert ga_v[5] == f"{150.0:.4g} ± {np.std([100.0, 200.0]):.2g}"
+    assert ga_v[5] == f"{150.0:.4g} ± {np.std([100.0, 200.0], ddof=1):.2g}"
     assert ga_v[6] == f"{100 * (150.0 - 11304.0) / 11304.0:+.1f} %"
     assert by[("Table 3 (w_d = 0.5)", "cmaes", "d")][5] == "2"  # one run: no spread
     assert by[("Table 1 (max V)", "ga", "gdi")][5] == "0.5"  # the volume objective, whatever w_d
@@ -111,7 +111,7 @@ def test_table3_multirun_then_report(tmp_path):
     text = report_file.read_text()
     half = best[np.isclose(best["w_d"], 0.5)]
     mean_gdi = half["gdi"].mean()
-    assert f"| Table 3 (w_d = 0.5) | ga | 3 | gdi | 0.0547 | {mean_gdi:.4g} ± {half['gdi'].std(ddof=0):.2g} |" in text
+    assert f"| Table 3 (w_d = 0.5) | ga | 3 | gdi | 0.0547 | {mean_gdi:.4g} ± {half['gdi'].std(ddof=1):.2g} |" in text
     assert "| Table 1 (max V) | - | 0 | - | - | no runs in the dataset | - |" in text
 
 
@@ -169,8 +169,8 @@ def test_report_leaves_out_debug_runs_counts_a_repeat_once_and_keeps_studies_apa
         (dataset / table).mkdir(parents=True)
         frame.to_parquet(dataset / table / "part.parquet")
     text = report(dataset, "seed000_h4")
-    assert f"| Table 3 (w_d = 0.5) | ga [48bd74] | 2 | V (cm³·rad) | 11304 | {150.0:.4g} ± {50.0:.2g} |" in text
-    assert "| Table 3 (w_d = 0.5) | ga [48bd74] | 2 | d | 12.6 | 12 ± 2 |" in text
+    assert f"| Table 3 (w_d = 0.5) | ga [48bd74] | 2 | V (cm³·rad) | 11304 | {150.0:.4g} ± {50.0 * 2**0.5:.2g} |" in text
+    assert "| Table 3 (w_d = 0.5) | ga [48bd74] | 2 | d | 12.6 | 12 ± 2.8 |" in text
     assert "| Table 3 (w_d = 0.5) | ga [33d895] | 1 | V (cm³) | 11304 | 5000 |" in text
     assert "0.9" not in text and "Debug runs only" not in text  # the debug run left out, and not a smoke test
     smoke = best.assign(purpose="debug")

@@ -149,7 +149,7 @@ def h4_tables(r: Reproduction) -> tuple[dict[str, pd.DataFrame], dict[str, pd.Se
                     label,
                     "ic" if key == "gdi" else key,
                     p[key],
-                    f"{vals.mean():.4g} ± {vals.std():.2g}",
+                    f"{vals.mean():.4g} ± {vals.std(ddof=1):.2g}",
                     rel(vals.mean(), p[key]),
                 ]
             )
@@ -169,7 +169,7 @@ def h4_tables(r: Reproduction) -> tuple[dict[str, pd.DataFrame], dict[str, pd.Se
     r.add(f"""
 ### Tables 1-3: optima of V, GDI and the mixed index (30 × 150 GA, seeds {list(SEEDS)})
 
-Our values are mean ± standard deviation over the seeds; V in cm³·rad over
+Our values are mean ± sample standard deviation (n − 1) over the seeds; V in cm³·rad over
 θ ∈ [-45°, 45°], "ic" the GDI (average 1/κ over the workspace).
 
 {table(["study", "quantity", "paper", "ours", "difference"], rows)}

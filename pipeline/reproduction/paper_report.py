@@ -7,7 +7,7 @@ each printed table row (:mod:`pipeline.reproduction.papers`) the runs of the sam
 ``w_d`` for the mixed index), one line per optimiser and study (an experiment run with an
 override, another orientation say, is another study: its line carries the first digits of its
 ``study_hash``): how many runs, and for V (in its unit), GDI and each
-design variable the paper's number, ours as mean ± standard deviation over
+design variable the paper's number, ours as mean ± sample standard deviation (n − 1) over
 the runs, and the relative difference. Rows without runs in the dataset say
 so. It compares; it does not claim a reproduction: each paper file's header
 says what its numbers mean (e.g. the H4 paper's V in cm³ as printed, ours in
@@ -93,7 +93,7 @@ def compare(best: pd.DataFrame, paper: dict) -> list[list]:
                     continue
                 values = group[column].to_numpy(dtype=float)
                 mean = float(values.mean())
-                spread = float(values.std()) if len(values) > 1 else math.nan
+                spread = float(values.std(ddof=1)) if len(values) > 1 else math.nan
                 ours = f"{mean:.4g} ± {spread:.2g}" if len(values) > 1 else f"{mean:.4g}"
                 units = sorted(set(group["volume_unit"].astype(str))) if "volume_unit" in group else []
                 quantity = f"{key} ({', '.join(units)})" if key == "V" and units else key
@@ -116,7 +116,7 @@ def report(dataset: Path, paper_name: str) -> str:
     return (
         f"# {paper_name}: the paper's tables beside {dataset}\n\n"
         + ("**Debug runs only** (`+debug`, tiny sizes): a smoke test of this report, not results.\n\n" if smoke else "")
-        + "Ours: mean ± standard deviation over the runs of each objective, optimiser and study "
+        + "Ours: mean ± sample standard deviation (n − 1) over the runs of each objective, optimiser and study "
         "(debug runs left out, a repeat of a run counted once). "
         f"What the paper's numbers mean: `pipeline/reproduction/papers/{paper_name}.yaml`.\n\n"
         + table(["table", "optimiser", "runs", "quantity", "paper", "ours", "difference"], rows)
