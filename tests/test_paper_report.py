@@ -169,7 +169,9 @@ def test_report_leaves_out_debug_runs_counts_a_repeat_once_and_keeps_studies_apa
         (dataset / table).mkdir(parents=True)
         frame.to_parquet(dataset / table / "part.parquet")
     text = report(dataset, "seed000_h4")
-    assert f"| Table 3 (w_d = 0.5) | ga [48bd74] | 2 | V (cm³·rad) | 11304 | {150.0:.4g} ± {50.0 * 2**0.5:.2g} |" in text
+    assert (
+        f"| Table 3 (w_d = 0.5) | ga [48bd74] | 2 | V (cm³·rad) | 11304 | {150.0:.4g} ± {50.0 * 2**0.5:.2g} |" in text
+    )
     assert "| Table 3 (w_d = 0.5) | ga [48bd74] | 2 | d | 12.6 | 12 ± 2.8 |" in text
     assert "| Table 3 (w_d = 0.5) | ga [33d895] | 1 | V (cm³) | 11304 | 5000 |" in text
     assert "0.9" not in text and "Debug runs only" not in text  # the debug run left out, and not a smoke test
