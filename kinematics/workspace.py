@@ -67,13 +67,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from kinematics import kernels
+from kinematics import kernels, margin_cells
 from kinematics.base import Mechanism
 from kinematics.rows import row_all
 
 #: poses evaluated per vectorised chunk (bounds memory, not a per-pose loop)
 CHUNK = 1 << 17
-METHODS = ("grid", "midpoint", "polar")
+METHODS = ("grid", "midpoint", "polar", "margins")
+#: the methods that count boundary cells by fractions, on the grid method's node budget and axes
+FRACTION_METHODS = ("grid", "margins")
 #: the second resolution of the error estimate of ``method="grid"``, a fraction of the first
 ERROR_RESOLUTION = 0.5
 
@@ -265,7 +267,7 @@ def grid_nodes(
         orientation = mechanism.default_orientation
     fixed = fixed or {}
     sampled = _sampled_indices(mechanism, orientation, fixed, _exact_axis(mechanism, fixed))
-    if method != "grid":
+    if method not in FRACTION_METHODS:
         return int(resolution) ** len(sampled)
     return math.prod(_axis_nodes(mechanism, j, resolution) for j in sampled)
 
@@ -352,14 +354,14 @@ def default_resolution(
         orientation = mechanism.default_orientation
     names = sampled_axes(mechanism, orientation, fixed)
     n_axes = len(names)
-    budget = mechanism.grid_nodes if method == "grid" else None
+    budget = mechanism.grid_nodes if method in FRACTION_METHODS else None
     nodes = int(mechanism.default_nodes if budget is None else budget)
     if not n_axes:  # one node whatever the resolution: the budget itself, as a 1-axis grid's
         return nodes
     # from above (nodes are rounded up per axis): the budget over the product of the per-axis
     # factors, then down to the largest fit
     factors = [mechanism.grid_axis_nodes.get(name, 1.0) for name in names]
-    shrink = math.prod(factors) if method == "grid" else 1.0
+    shrink = math.prod(factors) if method in FRACTION_METHODS else 1.0
     res = int(math.ceil((nodes / shrink) ** (1.0 / n_axes))) + 1
     while res > 1 and grid_nodes(mechanism, res, orientation, fixed, method) > nodes:
         res -= 1
@@ -1600,23 +1602,28 @@ def _cut_edges(inside, strides, sizes):
     return axis, lower
 
 
-def _boundary_corrected_sums_compiled(
+def _sparse_crossings(
     values: _PointValues,
     axes: list[np.ndarray],
     box: tuple[np.ndarray, np.ndarray],
-    resolution: int,
     sampled: list[int],
     inside: np.ndarray,
     f0: np.ndarray,
     f1: np.ndarray,
     steps: int,
     ic: np.ndarray,
-) -> tuple[float, float]:
-    """:func:`_boundary_corrected_sums` with sparse bookkeeping: the grid edges whose ends
-    differ in membership are found slab by slab (vectorised comparisons of neighbouring layers),
-    only the inside end nodes' faces are evaluated, and the cut cells are summed compiled
-    (:func:`_cut_cell_corrections`) over the nodes next to a crossing only; the crossings are
-    placed by :func:`_crossings` (all edges in one call per step), as in the numpy path."""
+) -> dict[str, np.ndarray] | None:
+    """The boundary crossings of the grid's edges, sparse: the grid edges whose ends differ in
+    membership found slab by slab (vectorised comparisons of neighbouring layers), and the half
+    edges from an inside end node to an outside box face; each crossing placed by
+    :func:`_crossings` (all edges in one call per step). None where no edge is cut.
+
+    Returns a dict of arrays: ``axis`` (E,) the sampled axis (index into ``sampled``) of each
+    crossing's edge, ``left`` and ``right`` (E,) its end nodes (flat indices; -1 for the box
+    face), ``crossing`` (E,) its position (unit of the axis), ``value`` (2, E) the integrands
+    ``f0``, ``f1`` there; and the grid's bookkeeping: ``flat_inside``, ``f0``, ``f1`` (N,),
+    ``positions`` (d, .) the faces and nodes per sampled axis, ``strides``, ``sizes`` (d,),
+    ``steps_of`` (d,) the cell widths."""
     shape = inside.shape
     flat_inside = np.ascontiguousarray(inside.ravel())
     f0, f1 = np.ascontiguousarray(f0.ravel()), np.ascontiguousarray(f1.ravel())
@@ -1668,7 +1675,7 @@ def _boundary_corrected_sums_compiled(
     right = np.concatenate(right_parts).astype(np.int64)
     ic_out = np.concatenate(ic_parts)
     if not axis.size:
-        return float(f0.sum()), float(f1.sum())
+        return None
     stride_of = strides[axis]
     left_in = (left >= 0) & flat_inside[np.maximum(left, 0)]
     inner_node = np.where(left_in, left, right)
@@ -1686,6 +1693,44 @@ def _boundary_corrected_sums_compiled(
         steps,
         ic_out,
     )
+    return dict(
+        axis=axis,
+        left=left,
+        right=right,
+        crossing=crossing,
+        value=value,
+        flat_inside=flat_inside,
+        f0=f0,
+        f1=f1,
+        positions=positions,
+        strides=strides,
+        sizes=sizes,
+        steps_of=steps_of,
+    )
+
+
+def _boundary_corrected_sums_compiled(
+    values: _PointValues,
+    axes: list[np.ndarray],
+    box: tuple[np.ndarray, np.ndarray],
+    resolution: int,
+    sampled: list[int],
+    inside: np.ndarray,
+    f0: np.ndarray,
+    f1: np.ndarray,
+    steps: int,
+    ic: np.ndarray,
+) -> tuple[float, float]:
+    """:func:`_boundary_corrected_sums` with sparse bookkeeping: the grid edges whose ends
+    differ in membership are found slab by slab (vectorised comparisons of neighbouring layers),
+    only the inside end nodes' faces are evaluated, and the cut cells are summed compiled
+    (:func:`_cut_cell_corrections`) over the nodes next to a crossing only; the crossings are
+    placed by :func:`_crossings` (all edges in one call per step), as in the numpy path."""
+    cut = _sparse_crossings(values, axes, box, sampled, inside, f0, f1, steps, ic)
+    if cut is None:
+        return float(np.ascontiguousarray(f0.ravel()).sum()), float(np.ascontiguousarray(f1.ravel()).sum())
+    axis, left, right, flat_inside = cut["axis"], cut["left"], cut["right"], cut["flat_inside"]
+    f0, f1 = cut["f0"], cut["f1"]
     # the nodes next to a crossing: left of it (the crossing above them), right of it (below)
     has_left, has_right = left >= 0, right >= 0
     node = np.concatenate([left[has_left], right[has_right]])
@@ -1698,12 +1743,12 @@ def _boundary_corrected_sums_compiled(
         node[order],
         entry[order],
         axis,
-        crossing,
-        value,
-        positions,
-        strides,
-        sizes,
-        steps_of,
+        cut["crossing"],
+        cut["value"],
+        cut["positions"],
+        cut["strides"],
+        cut["sizes"],
+        cut["steps_of"],
         _NODE_SLOPE,
     )
     return float(f0.sum()) + correction0, float(f1.sum()) + correction1
@@ -1838,7 +1883,17 @@ def _occupied_box(
 
 
 def _integrate_grid(
-    mechanism, resolution, orientation, min_ic, length, fixed, keep_samples, offset=0.5, refine=True, steps=BISECTIONS
+    mechanism,
+    resolution,
+    orientation,
+    min_ic,
+    length,
+    fixed,
+    keep_samples,
+    offset=0.5,
+    refine=True,
+    steps=BISECTIONS,
+    margins=False,
 ):
     """Integration on a regular grid; one axis exactly when the mechanism allows it.
 
@@ -1862,6 +1917,10 @@ def _integrate_grid(
     the boundary crosses a node the plane passes through the node and the
     fraction is 1/2 from either side. ``steps``: bisections per crossing the margins
     cannot place.
+
+    ``margins=True`` (``method="margins"``, with ``refine``): the same grid and crossings, and
+    the cells along the boundary counted by the linear-margins rule of
+    :mod:`kinematics.margin_cells` instead of one plane per cell.
     """
     exact = _exact_axis(mechanism, fixed)
     box = mechanism.pose_bounds(orientation)
@@ -1891,7 +1950,12 @@ def _integrate_grid(
     vals = ic[inside]
     n_inside = int(inside.sum())
     f0, f1 = _integrands(inside, weight, ic)
-    if sampled:
+    if sampled and margins:
+        cut = _sparse_crossings(values, axes, box, sampled, inside.reshape(shape), f0, f1, steps, ic)
+        weight_sum, ic_sum = margin_cells.margin_cell_sums(
+            values, axes, sampled, inside.reshape(shape), ic.reshape(shape), cut
+        )
+    elif sampled:
         weight_sum, ic_sum = _boundary_corrected_sums(
             values,
             axes,
@@ -2173,6 +2237,25 @@ def _integrate_polar(mechanism, resolution, orientation, min_ic, length, keep_sa
     return volume, stats, n_samples, n_inside, samples
 
 
+def _check_margins_method(mechanism: Mechanism, orientation: tuple[float, float], fixed: dict[str, float]) -> None:
+    """ValueError (one line) where ``method="margins"`` cannot integrate: a mechanism without
+    reachability margins, with an exact axis, or a grid of more than 3 sampled axes."""
+    exact = _exact_axis(mechanism, fixed)
+    if exact is not None:
+        raise ValueError(
+            f"method 'margins' does not integrate an exact axis ({mechanism.name} integrates "
+            f"{mechanism.pose_names[exact]} exactly); use method 'grid'"
+        )
+    if mechanism.constraint_margins(np.zeros((1, mechanism.dof))) is None:
+        raise ValueError(f"method 'margins' needs a mechanism with constraint_margins; {mechanism.name} has none")
+    names = sampled_axes(mechanism, orientation, fixed)
+    if not 1 <= len(names) <= 3:
+        raise ValueError(
+            f"method 'margins' needs 1 to 3 sampled pose axes; {mechanism.name} samples {len(names)} "
+            f"({', '.join(names) or 'none'}) here: fix some (fixed=...) or use method 'grid'"
+        )
+
+
 # --------------------------------------------------------------- evaluate
 def evaluate(
     mechanism: Mechanism,
@@ -2210,12 +2293,14 @@ def evaluate(
     length : float, optional
         Characteristic length homogenising the Jacobian (default: the
         mechanism's).
-    method : {"grid", "midpoint", "polar"}
+    method : {"grid", "midpoint", "polar", "margins"}
         The grid with boundary cells counted by their inside fraction (the
         default: second order, continuous in the design; dearer than the plain
         count at the defaults, docs/accuracy.md), the plain cell-centre count (first order,
-        the objective of earlier versions), or the Tricept paper's polar
-        boundary search.
+        the objective of earlier versions), the Tricept paper's polar
+        boundary search, or the same grid with the boundary cells counted under linear
+        margins (:mod:`kinematics.margin_cells`; not yet a default: mechanisms with margins
+        and no exact axis, at most 3 sampled axes; its default resolution is the grid's).
     fixed : dict, optional
         Pose variables held at a value (e.g. ``{"z": 0.0}`` for a slice);
         the volume is the measure over the others.
@@ -2257,6 +2342,8 @@ def evaluate(
 
     if method == "polar" and fixed:
         raise ValueError("fixed pose variables are not supported with method 'polar'")
+    if method == "margins":
+        _check_margins_method(mechanism, orientation, fixed)
 
     # exact sections (3-RPR): method "grid" integrates the section axis in closed form
     sections = method == "grid" and not return_samples and _has_sections(mechanism, fixed)
@@ -2270,7 +2357,15 @@ def evaluate(
         )
     else:
         volume, (ic_mean, ic_min, ic_max), n_samples, n_inside, samples = _integrate_grid(
-            mechanism, resolution, orientation, min_ic, length, fixed, return_samples, refine=method == "grid"
+            mechanism,
+            resolution,
+            orientation,
+            min_ic,
+            length,
+            fixed,
+            return_samples,
+            refine=method in FRACTION_METHODS,
+            margins=method == "margins",
         )
     volume_error = gdi_error = math.nan
     if error_estimate:
@@ -2287,9 +2382,16 @@ def evaluate(
             other_volume, (other_mean, _, _), *_ = _integrate_sections(
                 mechanism, max(int(round(ERROR_RESOLUTION * resolution)), 2), orientation, min_ic, length
             )
-        elif method == "grid":
+        elif method in FRACTION_METHODS:
             other_volume, (other_mean, _, _), *_ = _integrate_grid(
-                mechanism, max(int(round(ERROR_RESOLUTION * resolution)), 2), orientation, min_ic, length, fixed, False
+                mechanism,
+                max(int(round(ERROR_RESOLUTION * resolution)), 2),
+                orientation,
+                min_ic,
+                length,
+                fixed,
+                False,
+                margins=method == "margins",
             )
         else:
             other_volume, (other_mean, _, _), *_ = _integrate_grid(
