@@ -19,9 +19,9 @@ target: it says which cells the next cell rule must treat. Mechanisms with an ex
 are not supported (a cell's fraction there is a length, not a membership), nor those integrated
 by exact sections (the 2-RPR, the 3-RPR). Seeded (seed 1).
 
-``--candidate`` also measures a cell rule that is not in the code, on the same random points as
-the Monte Carlo (so that the two rules' difference carries no sampling noise):
-**linear margins** (:func:`linear_margin_inside`). Each of the mechanism's margins and the
+``--candidate`` also measures the cell rule of ``evaluate(method="margins")`` (opt-in, not the
+default) on the same random points as the Monte Carlo (so that the two rules' difference carries
+no sampling noise): **linear margins** (:func:`linear_margin_inside`). Each of the mechanism's margins and the
 dexterity margin ``1/kappa^2 - limit^2`` is taken as linear over a cut node's cell: its value at
 the node, its central difference between the neighbouring nodes (one-sided where one is
 undefined), and, along an axis whose edge crossing that margin places, the secant through
@@ -44,7 +44,7 @@ import numpy as np
 from scipy.ndimage import maximum_filter, minimum_filter
 
 from benchmarks.accuracy import METHODS, REFERENCE_FACTOR, SCAN, SCAN_SEED, designs, random_designs
-from kinematics import MECHANISMS, kernels
+from kinematics import MECHANISMS, kernels, margin_cells
 from kinematics import workspace as ws
 from kinematics.polytope import clipped_cell
 from kinematics.workspace import _grid_poses
@@ -135,71 +135,30 @@ def _cell_points(seen: dict, nodes: np.ndarray, points: int, rng: np.random.Gene
     return offsets, member
 
 
-def _node_margins(seen: dict) -> np.ndarray:
-    """Every grid node's margins (grid shape + (K + 1,)): the mechanism's reachability margins and
-    the dexterity margin ``1/kappa^2 - limit^2`` (NaN where a margin is undefined)."""
-    values, axes, inside = seen["values"], seen["axes"], seen["inside"]
-    poses = _grid_poses(axes, 0, inside.size)
-    margins = values.margins(poses.copy())
-    ic = values(poses.copy())[2]
-    return np.column_stack([margins, ic**2 - values.min_ic**2]).reshape(inside.shape + (-1,))
-
-
-def _differences(margins: np.ndarray, j: int) -> np.ndarray:
-    """The change of ``margins`` (grid shape + (K,)) per node along grid axis ``j``: the central
-    difference, one-sided where a neighbour is missing or undefined, 0 where both are."""
-    ahead, behind = np.full(margins.shape, np.nan), np.full(margins.shape, np.nan)
-    lower, upper = [slice(None)] * margins.ndim, [slice(None)] * margins.ndim
-    lower[j], upper[j] = slice(0, -1), slice(1, None)
-    step = margins[tuple(upper)] - margins[tuple(lower)]
-    ahead[tuple(lower)], behind[tuple(upper)] = step, step
-    both = np.isfinite(ahead) & np.isfinite(behind)
-    one = np.where(np.isfinite(ahead), ahead, np.where(np.isfinite(behind), behind, 0.0))
-    return np.where(both, 0.5 * (ahead + behind), one)
-
-
 def linear_margins(seen: dict, nodes: np.ndarray, secant: bool = True) -> tuple[np.ndarray, np.ndarray]:
-    """The candidate rule "linear margins" (module docstring) in the cells of ``nodes`` (flat
-    indices): each margin's value at the node (M, K + 1) and its change per cell width along the
-    sampled axes (M, K + 1, d), NaN where unknown. A margin undefined at the node (an angle where
-    the inverse kinematics has no solution) is extrapolated from a neighbour where it is defined;
-    the slope along an axis is the secant through the edge crossing of that axis whose margin is
-    nearest 0 there (for each side's crossing within the edge; ``secant=False``: the differences
-    alone, no crossings, so no looks between the nodes)."""
-    inside, sampled, axes, widths, values = (seen[k] for k in ("inside", "sampled", "axes", "widths", "values"))
-    shape, d = inside.shape, len(sampled)
-    grid = _node_margins(seen)
-    count = grid.shape[-1]
-    slopes = np.stack([_differences(grid, j) for j in sampled], axis=-1).reshape(-1, count, d)
-    grid = grid.reshape(-1, count)
-    at, slope = grid[nodes].copy(), slopes[nodes].copy()  # (M, K), (M, K, d)
-    index = np.array(np.unravel_index(nodes, shape))
-    for k, j in enumerate(sampled):  # undefined at the node: from the first neighbour that defines it
-        for step in (1, -1):
-            neighbour = index[j] + step
-            within = (neighbour >= 0) & (neighbour < shape[j])
-            flat = nodes + step * int(np.prod(shape[j + 1 :]))
-            rows, margin = np.nonzero(~np.isfinite(at) & within[:, None])
-            there = flat[rows]
-            known = np.isfinite(grid[there, margin])
-            rows, margin, there = rows[known], margin[known], there[known]
-            at[rows, margin] = grid[there, margin] - step * slopes[there, margin, k]
-            slope[rows, margin] = slopes[there, margin]
-    for k, j in enumerate(sampled if secant else []):  # the secant through each edge crossing, for its margin
-        for crossings, sign in ((seen["crossings"][k][1], 1.0), (seen["crossings"][k][0], -1.0)):
-            distance = crossings.ravel()[nodes] / widths[k]
-            rows = np.nonzero(np.isfinite(distance) & (distance > 1e-9))[0]
-            if not rows.size:
-                continue
-            poses = np.column_stack([axes[jj][index[jj, rows]] for jj in range(inside.ndim)])
-            poses[:, j] += sign * distance[rows] * widths[k]
-            there = np.column_stack([values.margins(poses.copy()), values(poses.copy())[2] ** 2 - values.min_ic**2])
-            nearness = np.where(np.isfinite(there), np.abs(there) / (np.abs(slope[rows, :, k]) + 1e-300), np.inf)
-            margin = np.argmin(nearness, axis=1)
-            defined = np.isfinite(at[rows, margin])
-            rows, margin = rows[defined], margin[defined]
-            slope[rows, margin, k] = -at[rows, margin] / (sign * distance[rows])
-    return at, slope
+    """The rule "linear margins" of ``evaluate(method="margins")``
+    (:func:`kinematics.margin_cells.linear_margins`) in the cells of ``nodes`` (flat indices) of
+    the captured grid: each margin's value at the node (M, K + 1) and its change per cell width
+    along the sampled axes (M, K + 1, d), NaN where unknown; the secants through the captured
+    crossings (``secant=False``: the differences alone, no crossings)."""
+    values, axes, inside, sampled, widths = (seen[k] for k in ("values", "axes", "inside", "sampled", "widths"))
+    poses = _grid_poses(axes, 0, inside.size)
+    ic = values(poses)[2].reshape(inside.shape)
+    sides = []
+    for side in (1, 0):  # the crossing above each node, then below
+        node, axis, distance, dexterity = [], [], [], []
+        for k, ((*distances, at_minus, at_plus), width) in enumerate(zip(seen["crossings"], widths)):
+            there = distances[side].ravel()
+            has = np.nonzero(np.isfinite(there))[0] if secant else np.zeros(0, dtype=int)
+            weight, weighted = (at_plus if side else at_minus).reshape(2, -1)[:, has]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                dexterity.append(np.where(weight > 0, (weighted / weight) ** 2 - values.min_ic**2, np.nan))
+            node.append(has)
+            axis.append(np.full(has.size, k))
+            distance.append(there[has] / width)
+        sides.append(tuple(np.concatenate(part) for part in (node, axis, distance, dexterity)))
+    margins = margin_cells.NodeMargins(values, axes, inside, ic, nodes)
+    return margin_cells.linear_margins(values, axes, sampled, widths, margins, sides, nodes)
 
 
 def linear_margin_inside(seen: dict, nodes: np.ndarray, offsets: np.ndarray) -> np.ndarray:
@@ -232,7 +191,7 @@ def candidate(mech, points: int = 200, seed: int = 1) -> list[tuple[str, float, 
     rules = {
         "plane through the nearest crossings (the code)": np.where(is_in, seen["own"], 1.0 - seen["own"]),
         "the same planes on the points (no fading)": np.where(is_in[:, None], node_side, ~node_side).mean(axis=1),
-        "linear margins (candidate, not in the code)": linear_margin_inside(seen, cut, offsets).mean(axis=1),
+        "linear margins (method margins) on the points": linear_margin_inside(seen, cut, offsets).mean(axis=1),
         # the same rule's exact part of each cell: its row carries the Monte Carlo's noise
         "linear margins, exact part (kinematics.polytope)": clipped_cell(*linear_margins(seen, cut))[0],
     }
@@ -251,75 +210,36 @@ def candidate(mech, points: int = 200, seed: int = 1) -> list[tuple[str, float, 
     return rows
 
 
-def _cell_means(values: np.ndarray, inside: np.ndarray, sampled: list[int]) -> np.ndarray:
-    """Each inside node's cell mean of an integrand given at the nodes (grid shape): the node's
-    value plus ``1/24`` of its second difference along each sampled axis whose two neighbours
-    are inside (the mean of a parabola over a cell of width 1 is its centre value plus
-    ``f''/24``; where a neighbour is outside, the node's value alone)."""
-    known = np.where(inside, values, np.nan)
-    mean = known.copy()
-    for j in sampled:
-        second = np.full(known.shape, np.nan)
-        middle, ahead, behind = ([slice(None)] * known.ndim for _ in range(3))
-        middle[j], ahead[j], behind[j] = slice(1, -1), slice(2, None), slice(0, -2)
-        second[tuple(middle)] = known[tuple(ahead)] + known[tuple(behind)] - 2.0 * known[tuple(middle)]
-        mean += np.where(np.isfinite(second), second, 0.0) / 24.0
-    return np.where(inside, mean, 0.0)
-
-
 def volume_errors(mech, resolutions: list[int | None]) -> list[tuple]:
     """Rows ``(resolution, nodes, code's V, GDI errors, linear margins' V, GDI errors, V error
     without the crossings' secants)`` in % of the reference (the code at
     :data:`benchmarks.accuracy.REFERENCE_FACTOR` x the finer default, as the scan of
-    ``benchmarks.accuracy``).
-
-    The linear margins' V is the whole grid's: every node whose 26 neighbours share its
-    membership counts its cell whole or not at all; every other node (the cut cells and the
-    uncut cells whose corner the boundary may reach) counts the exact part of its cell where
-    its linear margins hold (:func:`linear_margins`, :func:`kinematics.polytope.clipped_cell`).
-    Its GDI takes 1/kappa of such a part at the part's centroid, from the linear dexterity
-    margin ``1/kappa^2 - limit^2`` there, and of a whole cell its mean by :func:`_cell_means`
-    (1/kappa falls like a root towards a singular boundary: the node's value alone, the
-    midpoint rule, erred by +0.085 % of the GDI on Delta scan 0 with every boundary part exact
-    by Monte Carlo, and by +0.008 % with the second differences). No Monte Carlo: the errors
-    are the rules' own."""
+    ``benchmarks.accuracy``). The linear margins' are ``evaluate(method="margins")``'s (the
+    whole grid: :mod:`kinematics.margin_cells`); without the secants, its V from the nodes'
+    margins alone. No Monte Carlo: the errors are the rules' own."""
     r0 = max(ws.default_resolution(mech, method=method) for method in METHODS)  # as benchmarks.accuracy's scan
     reference = ws.evaluate(mech, resolution=REFERENCE_FACTOR * r0, error_estimate=False)
     rows = []
     for resolution in resolutions:
         seen = _captured_grid(mech, resolution)
         inside = seen["inside"]
-        membership = inside.astype(np.uint8)
-        band = np.nonzero(
-            (
-                maximum_filter(membership, size=3, mode="nearest") != minimum_filter(membership, size=3, mode="nearest")
-            ).ravel()
-        )[0]
-        poses = _grid_poses(seen["axes"], 0, inside.size)
-        ic = np.where(inside.ravel(), seen["values"](poses)[2], 0.0)
-        whole = inside.ravel().copy()
-        whole[band] = False
-        means = _cell_means(ic.reshape(inside.shape), inside, seen["sampled"]).ravel()
         code = seen["evaluation"]
+        rule = ws.evaluate(mech, resolution=resolution, method="margins", error_estimate=False)
+        band = margin_cells.boundary_band(inside)
+        fraction, _ = clipped_cell(*linear_margins(seen, band, secant=False))
+        cells = float(inside.sum()) - float(inside.ravel()[band].sum()) + float(fraction.sum())
         per_cell = code.volume / float(seen["sums"][0])  # V of one cell of this grid
-        row = [
-            "default" if resolution is None else str(resolution),
-            int(inside.size),
-            100 * (code.volume / reference.volume - 1),
-            100 * (code.gdi / reference.gdi - 1),
-        ]
-        for secant in (True, False):
-            at, slope = linear_margins(seen, band, secant)
-            fraction, centroid = clipped_cell(at, slope)
-            cells = float(whole.sum()) + float(fraction.sum())
-            row.append(100 * (cells * per_cell / reference.volume - 1))
-            if secant:
-                dexterity = at[:, -1] + np.einsum("md,md->m", slope[:, -1, :], centroid)
-                at_centroid = np.sqrt(np.maximum(dexterity + seen["values"].min_ic ** 2, 0.0))
-                part = np.where(np.isfinite(dexterity), at_centroid, ic[band])
-                gdi = (float(means[whole].sum()) + float((fraction * part).sum())) / cells
-                row.append(100 * (gdi / reference.gdi - 1))
-        rows.append(tuple(row))
+        rows.append(
+            (
+                "default" if resolution is None else str(resolution),
+                int(inside.size),
+                100 * (code.volume / reference.volume - 1),
+                100 * (code.gdi / reference.gdi - 1),
+                100 * (rule.volume / reference.volume - 1),
+                100 * (rule.gdi / reference.gdi - 1),
+                100 * (cells * per_cell / reference.volume - 1),
+            )
+        )
     return rows
 
 

@@ -46,7 +46,7 @@ def boundary_band(inside: np.ndarray) -> np.ndarray:
     return np.nonzero(mixed.ravel())[0]
 
 
-class _NodeMargins:
+class NodeMargins:
     """The margins (K + 1 columns) of the grid nodes near the band: the mechanism's reachability
     margins (``values.margins``) and the dexterity margin ``ic^2 - min_ic^2`` (``ic`` the nodes'
     1/kappa, NaN where unreachable), NaN where undefined, computed once for every node within
@@ -101,7 +101,7 @@ def linear_margins(
     axes: list[np.ndarray],
     sampled: list[int],
     widths: list[float],
-    margins: _NodeMargins,
+    margins: NodeMargins,
     crossings: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]],
     nodes: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -116,7 +116,7 @@ def linear_margins(
         The grid's node positions per pose axis (unit of the axis).
     sampled, widths : list
         The sampled pose axes and their cell widths (unit of the axis).
-    margins : _NodeMargins
+    margins : NodeMargins
         The nodes' margins.
     crossings : list of (node, axis, distance, dexterity)
         Per side (the crossing above the node, then below), arrays over the crossings: the node
@@ -203,7 +203,7 @@ def margin_cell_sums(
     if cut is None:
         return float(inside.sum()), float(cell_means(node_ic, inside, sampled).sum())
     band = boundary_band(inside)
-    margins = _NodeMargins(values, axes, inside, ic, band)
+    margins = NodeMargins(values, axes, inside, ic, band)
     widths = [float(w) for w in cut["steps_of"]]
     # each crossing as seen from its two end nodes: above the left one, below the right one
     axis, left, right, crossing = cut["axis"], cut["left"], cut["right"], cut["crossing"]

@@ -633,7 +633,7 @@ def test_the_candidate_rule_is_measured_on_the_same_points_as_the_code_s():
     """``python -m benchmarks.cell_errors ... --candidate``: the code's planes tested on the random
     points agree with its exact cut fractions within the Monte Carlo's noise (0.08 % of V at 50
     points a cell: the paired model is the code's rule, a side mixed up errs by percents), and the
-    candidate "linear margins" (each margin linear over the cell; not in the code) errs less per
+    rule "linear margins" (each margin linear over the cell; evaluate(method="margins")) errs less per
     cut cell than those planes on the Delta's paper design (0.0047 against 0.0168 of a cell,
     measured), with a net error of the size of the method's (+0.05 %)."""
     from benchmarks.cell_errors import candidate
