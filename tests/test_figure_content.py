@@ -430,3 +430,45 @@ def test_a_repeat_is_the_same_config_not_the_same_seed_number():
         "ga [123456]",
         "cmaes",
     ]
+
+
+def test_an_optimum_beaten_by_another_w_d_s_design_is_marked_and_reported(tmp_path, saved):
+    """A user's Gough-Stewart sweep: at w_d = 0.25 CMA-ES stopped in another basin, and the design
+    it found at w_d = 0 scored 0.53 % more there. eta is linear in w_d for a fixed design, so the
+    stored GDI and SURI score every optimum at every w_d: the run is listed, ringed in the
+    trade-off and named in the report; a sweep whose optima each win at their own w_d has none."""
+    from pipeline.report.html import beaten_note
+
+    runs = pd.DataFrame(
+        {
+            "objective": ["mixed"] * 3,
+            "mechanism": ["gough_stewart"] * 3,
+            "optimizer": ["cmaes"] * 3,
+            "w_d": [0.0, 0.25, 0.5],
+            "seed": [0, 0, 0],
+            "run_id": ["a", "b", "c"],
+            "gdi": [0.20, 0.16, 0.34],
+            "suri": [0.13, 0.08, 0.02],
+            "objective_error": [1e-4, 7.8e-5, 1e-4],
+        }
+    )
+    runs["objective_value"] = runs["w_d"] * runs["gdi"] + (1 - runs["w_d"]) * runs["suri"]
+    beaten = plot_module.beaten_optima(runs)
+    assert beaten[["w_d", "other_w_d"]].values.tolist() == [[0.25, 0.0]]
+    assert beaten["other_value"].iloc[0] == pytest.approx(0.25 * 0.20 + 0.75 * 0.13)
+    assert beaten["gap"].iloc[0] == pytest.approx((0.25 * 0.20 + 0.75 * 0.13) / 0.10 - 1)
+    note = beaten_note(runs)
+    assert "1 optimum beaten" in note and "w_d = 0.25 (seed 0)" in note and "found at w_d = 0 (seed 0)" in note
+    plot_module.plot_tradeoff(runs, tmp_path / "t.png")
+    ax = saved[-1].axes[0]
+    rings = [line for line in ax.lines if line.get_markeredgecolor() == "red"]
+    assert len(rings) == 1 and list(rings[0].get_xdata()) == [0.25]
+    legend = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "η beaten by another w_d's design" in legend
+    check_figure(saved[-1])
+    # each optimum the best at its own w_d: nothing beaten; a gap within the runs' error: nothing either
+    fair = runs.assign(gdi=[0.20, 0.22, 0.34], suri=[0.13, 0.13, 0.02])
+    fair["objective_value"] = fair["w_d"] * fair["gdi"] + (1 - fair["w_d"]) * fair["suri"]
+    assert plot_module.beaten_optima(fair).empty and beaten_note(fair) == ""
+    close = runs.assign(objective_error=[1e-4, 0.05, 1e-4])  # the gap, 0.0475, within its error
+    assert plot_module.beaten_optima(close).empty

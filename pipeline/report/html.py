@@ -40,7 +40,7 @@ from pipeline.config import study_hash
 from pipeline.errors import ConfigError, RunError
 from pipeline.report.figures import GROUP_KEYS, caption, convergence_figure, group_keys, workspace_gallery
 from pipeline.stages.dataset_build import with_run_ids
-from pipeline.stages.plot import debug_rows, distinct_seeds, plot_tradeoff, symbol, with_study
+from pipeline.stages.plot import beaten_optima, debug_rows, distinct_seeds, plot_tradeoff, symbol, with_study
 from pipeline.store.dataset import DEFAULT_PURPOSES, read_dataset
 from pipeline.store.runs import MANIFEST, read_manifest
 
@@ -111,6 +111,29 @@ def debug_note(best: pd.DataFrame) -> str:
     return (
         f'<p class="note"><strong>{count} of {len(best)} runs are debug runs</strong> (+debug presets, '
         "tiny sizes): a smoke test, not results.</p>\n"
+    )
+
+
+def beaten_note(best: pd.DataFrame) -> str:
+    """A warning above the report where a mixed-index optimum scores below another run's design
+    of the same study at its own w_d (:func:`~pipeline.stages.plot.beaten_optima`): the
+    optimiser stopped in another basin, and the trade-off dips there."""
+    beaten = beaten_optima(best)
+    if not len(beaten):
+        return ""
+    items = "".join(
+        f"<li>{html.escape(str(row.mechanism))}, w_d = {row.w_d:g} (seed {row.seed}): η "
+        f"{row.objective_value:.6g} ± {row.objective_error:.2g}, while the design found at w_d = "
+        f"{row.other_w_d:g} (seed {row.other_seed}) scores {row.other_value:.6g} there "
+        f"(+{100 * row.gap:.2f} %)</li>"
+        for row in beaten.itertuples()
+    )
+    return (
+        f'<p class="note"><strong>{len(beaten)} optimum{"s" * (len(beaten) > 1)} beaten by another run\'s design '
+        "of the same study</strong> (η = w_d·GDI + (1 − w_d)·SURI of that design, from its stored GDI and "
+        "SURI, beyond both runs' error): the optimiser stopped in another basin. Rerun those w_d with "
+        "more restarts or another optimiser; the trade-off marks them with a red ring.</p>"
+        f"<ul>{items}</ul>"
     )
 
 
@@ -327,7 +350,7 @@ def build_report(source: Path, out: Path | None = None) -> str:
 <title>pm-design report: {title}</title>
 <style>{style}</style></head><body>
 <h1>pm-design report: {title}</h1>
-{debug_note(best)}<p>{len(best)} complete runs; generated {time.strftime("%Y-%m-%d %H:%M:%S")}. Click a column header to sort;
+{debug_note(best)}{beaten_note(best)}<p>{len(best)} complete runs; generated {time.strftime("%Y-%m-%d %H:%M:%S")}. Click a column header to sort;
 scroll or click a figure to zoom (drag to pan, double-click to reset). Hover a row for its run id.</p>
 <h2>Optima</h2>{optima_table(best, dirs, base)}
 <h2>Runs and seeds</h2>{seeds_table(best)}

@@ -278,6 +278,82 @@ def study_labels(keys: list[tuple]) -> list[str]:
     ]
 
 
+def beaten_optima(best: pd.DataFrame) -> pd.DataFrame:
+    """Mixed-index optima that another run's design of the same study beats at their own w_d.
+
+    eta = w_d GDI + (1 - w_d) SURI is linear in w_d for a fixed design, so every optimum of a
+    sweep (mechanism, optimiser, experiment and ``study_hash``, the trade-off's lines: the same
+    evaluation settings, other w_d and seeds) can be
+    scored at every other run's w_d from its stored GDI and SURI, with no evaluation. An optimum
+    below the best of those by more than the larger of the two runs' ``objective_error`` (their
+    discretisation errors; 0 where absent) stopped short of a design the sweep itself found: a
+    local optimum (another basin), which a trade-off curve would show as a dip.
+
+    Returns
+    -------
+    DataFrame
+        One row per beaten optimum: ``mechanism``, ``study_hash``, ``w_d``, ``seed``, ``run_id``,
+        ``objective_value``, ``objective_error``, the beating design's ``other_w_d`` and
+        ``other_seed``, its eta at this run's w_d ``other_value``, and ``gap`` (other_value /
+        objective_value - 1). Empty where nothing is beaten.
+    """
+    columns = [
+        "mechanism",
+        "study_hash",
+        "w_d",
+        "seed",
+        "run_id",
+        "objective_value",
+        "objective_error",
+        "other_w_d",
+        "other_seed",
+        "other_value",
+        "gap",
+    ]
+    needed = {"objective", "mechanism", "w_d", "gdi", "suri", "objective_value"}
+    if not needed <= set(best.columns):
+        return pd.DataFrame(columns=columns)
+    mixed = with_study(best[best["objective"].astype(str) == "mixed"])
+    # the trade-off's groups: a dataset from before study_hash existed still keeps optimisers and
+    # experiments apart
+    keys = ["mechanism", *(k for k in ("optimizer", "experiment") if k in mixed.columns), "study_hash"]
+    rows = []
+    for key, group in mixed.groupby(keys, sort=True):
+        mechanism, study = key[0], key[-1]
+        if group["w_d"].nunique() < 2:
+            continue
+        w = group["w_d"].to_numpy(dtype=float)
+        gdi, suri = group["gdi"].to_numpy(dtype=float), group["suri"].to_numpy(dtype=float)
+        value = group["objective_value"].to_numpy(dtype=float)
+        error = (
+            group["objective_error"].fillna(0.0).to_numpy(dtype=float)
+            if "objective_error" in group
+            else np.zeros(len(group))
+        )
+        scored = w[:, None] * gdi[None, :] + (1.0 - w[:, None]) * suri[None, :]  # run i's w_d, run j's design
+        other = np.argmax(scored, axis=1)
+        for i, j in enumerate(other):
+            margin = scored[i, j] - value[i]
+            if margin > max(error[i], error[j]) and margin > 1e-12 * abs(value[i]):
+                row = group.iloc[i]
+                rows.append(
+                    [
+                        mechanism,
+                        study,
+                        float(w[i]),
+                        row.get("seed"),
+                        row.get("run_id"),
+                        float(value[i]),
+                        float(error[i]),
+                        float(w[j]),
+                        group.iloc[j].get("seed"),
+                        float(scored[i, j]),
+                        float(scored[i, j] / value[i] - 1.0),
+                    ]
+                )
+    return pd.DataFrame(rows, columns=columns)
+
+
 #: what the trade-off draws per line group: column, label, marker and line style
 TRADEOFF_QUANTITIES = (("gdi", "GDI", "o", "-"), ("suri", "SURI", "s", "--"), ("objective_value", "η", "^", ":"))
 
@@ -307,6 +383,12 @@ def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
         ]
         labels = study_labels([key for key, _ in groups])
         handles, most_seeds = [], 0
+        beaten = beaten_optima(part)
+        if len(beaten):  # a run that stopped short of a design its own sweep found (another basin)
+            ax.plot(beaten["w_d"], beaten["objective_value"], "o", ms=11, mfc="none", mec="red", mew=1.5, zorder=5)
+            handles.append(
+                Line2D([], [], marker="o", ms=9, mfc="none", mec="red", ls="", label="η beaten by another w_d's design")
+            )
         for number, ((_, frame), label) in enumerate(zip(groups, labels)):
             colour = f"C{number % 10}"
             stats = frame.groupby("w_d")[["gdi", "suri", "objective_value"]].agg(["mean", "min", "max"])
