@@ -35,6 +35,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.ndimage import binary_dilation, maximum_filter, minimum_filter
 
+from kinematics import kernels
 from kinematics.polytope import clipped_cell
 
 
@@ -85,15 +86,94 @@ class NodeMargins:
         within = (coordinate >= 0) & (coordinate < self.shape[j])
         return self.table[np.where(within, self.slot[np.where(within, target, 0)], self.table.shape[0] - 1)]
 
-    def difference(self, nodes: np.ndarray, j: int) -> np.ndarray:
+    def difference(self, nodes: np.ndarray, j: int, neighbours: tuple | None = None) -> np.ndarray:
         """The change per node of the margins along grid axis ``j`` at ``nodes``: the central
-        difference, one-sided where a neighbour is off the grid or undefined, 0 where both are."""
-        here = self.at(nodes)
-        ahead = self.at(nodes, j, 1) - here
-        behind = here - self.at(nodes, j, -1)
+        difference, one-sided where a neighbour is off the grid or undefined, 0 where both are.
+        ``neighbours``: the values at the nodes and at the two neighbours along ``j``, where the
+        caller has them."""
+        here, after, before = neighbours or (self.at(nodes), self.at(nodes, j, 1), self.at(nodes, j, -1))
+        ahead, behind = after - here, here - before
         both = np.isfinite(ahead) & np.isfinite(behind)
         one = np.where(np.isfinite(ahead), ahead, np.where(np.isfinite(behind), behind, 0.0))
         return np.where(both, 0.5 * (ahead + behind), one)
+
+
+@kernels.inline_jit
+def _value(table, slot, shape, strides, node, j, step, c):
+    """Margin ``c`` of the node ``step`` nodes along grid axis ``j`` from ``node``; NaN off the grid."""
+    coordinate = (node // strides[j]) % shape[j] + step
+    if coordinate < 0 or coordinate >= shape[j]:
+        return np.nan
+    return table[slot[node + step * strides[j]], c]
+
+
+@kernels.inline_jit
+def _difference(table, slot, shape, strides, node, j, c):
+    """:meth:`NodeMargins.difference` of one node and margin."""
+    here = table[slot[node], c]
+    ahead = _value(table, slot, shape, strides, node, j, 1, c) - here
+    behind = here - _value(table, slot, shape, strides, node, j, -1, c)
+    if np.isfinite(ahead) and np.isfinite(behind):
+        return 0.5 * (ahead + behind)
+    if np.isfinite(ahead):
+        return ahead
+    if np.isfinite(behind):
+        return behind
+    return 0.0
+
+
+@kernels.jit
+def _node_linear_margins(table, slot, shape, strides, nodes, sampled):
+    """Each margin's value and differences at ``nodes`` (the part of :func:`linear_margins`
+    before the secants), compiled: a margin undefined at the node from the first neighbour along
+    a sampled axis (in order, the one above first) that defines it. Per node the table rows of
+    its neighbours along each sampled axis are found once (the last row of ``table``, all NaN,
+    stands for a neighbour off the grid)."""
+    m, count, d = nodes.shape[0], table.shape[1], sampled.shape[0]
+    missing = table.shape[0] - 1
+    at = np.empty((m, count))
+    slope = np.empty((m, count, d))
+    above = np.empty(d, dtype=np.int64)
+    below = np.empty(d, dtype=np.int64)
+    for i in range(m):
+        node = nodes[i]
+        here = slot[node]
+        for k in range(d):
+            j = sampled[k]
+            coordinate = (node // strides[j]) % shape[j]
+            above[k] = slot[node + strides[j]] if coordinate + 1 < shape[j] else missing
+            below[k] = slot[node - strides[j]] if coordinate > 0 else missing
+        for c in range(count):
+            value = table[here, c]
+            at[i, c] = value
+            for k in range(d):
+                ahead = table[above[k], c] - value
+                behind = value - table[below[k], c]
+                if np.isfinite(ahead) and np.isfinite(behind):
+                    slope[i, c, k] = 0.5 * (ahead + behind)
+                elif np.isfinite(ahead):
+                    slope[i, c, k] = ahead
+                elif np.isfinite(behind):
+                    slope[i, c, k] = behind
+                else:
+                    slope[i, c, k] = 0.0
+            if np.isfinite(value):
+                continue
+            found = False
+            for k in range(d):
+                for step in (1, -1):
+                    neighbour = table[above[k], c] if step == 1 else table[below[k], c]
+                    if not np.isfinite(neighbour):
+                        continue
+                    there = node + step * strides[sampled[k]]
+                    at[i, c] = neighbour - step * _difference(table, slot, shape, strides, there, sampled[k], c)
+                    for kk in range(d):
+                        slope[i, c, kk] = _difference(table, slot, shape, strides, there, sampled[kk], c)
+                    found = True
+                    break
+                if found:
+                    break
+    return at, slope
 
 
 def linear_margins(
@@ -124,22 +204,14 @@ def linear_margins(
         (cell widths, > 0) and the dexterity margin there (NaN unknown).
     nodes : ndarray of int, shape (M,)
     """
-    at = margins.at(nodes)
-    slope = np.stack([margins.difference(nodes, j) for j in sampled], axis=-1)
-    for k, j in enumerate(sampled):  # undefined at the node: from the first neighbour that defines it
-        for step in (1, -1):
-            rows, margin = np.nonzero(~np.isfinite(at))
-            if not rows.size:
-                break
-            there = nodes[rows] + step * margins.strides[j]
-            value = margins.at(nodes[rows], j, step)[np.arange(rows.size), margin]
-            known = np.isfinite(value)
-            rows, margin, there, value = rows[known], margin[known], there[known], value[known]
-            if not rows.size:
-                continue
-            differences = np.stack([margins.difference(there, jj) for jj in sampled], axis=-1)
-            at[rows, margin] = value - step * differences[np.arange(rows.size), margin, k]
-            slope[rows, margin] = differences[np.arange(rows.size), margin]
+    at, slope = _node_linear_margins(
+        margins.table,
+        margins.slot,
+        np.asarray(margins.shape, dtype=np.int64),
+        np.asarray(margins.strides, dtype=np.int64),
+        np.ascontiguousarray(nodes, dtype=np.int64),
+        np.asarray(sampled, dtype=np.int64),
+    )
     row_of = np.full(margins.size, -1, dtype=np.int64)
     row_of[nodes] = np.arange(nodes.size)
     for sign, (node, axis, distance, dexterity) in zip((1.0, -1.0), crossings):
