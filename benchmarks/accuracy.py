@@ -16,6 +16,7 @@ reports against the true error), and the new method's cost phase by phase (:func
 
 from __future__ import annotations
 
+import argparse
 import cProfile
 import math
 import pstats
@@ -704,6 +705,8 @@ def figure(results: list[dict]) -> None:
 
 
 def main() -> None:
+    # --help prints the usage and exits before any work (the run rewrites docs/accuracy.md)
+    argparse.ArgumentParser(description=__doc__.split("\n")[0]).parse_args()
     results = []
     for name in sorted(MECHANISMS):
         r = study(name)

@@ -25,6 +25,7 @@ ratio also shows what the five-bar's own kinematics cost.
 
 from __future__ import annotations
 
+import argparse
 import time
 from collections.abc import Callable
 
@@ -52,6 +53,8 @@ def best_cpu_time(func: Callable[[], object], repeats: int = REPEATS) -> float:
 
 
 def main() -> None:
+    # --help prints the usage and exits before any work (the run takes minutes)
+    argparse.ArgumentParser(description=__doc__.split("\n")[0]).parse_args()
     try:
         five_bar_cls = resolve_mechanism(FIVE_BAR)
     except PluginError as exc:

@@ -13,13 +13,15 @@ Public API
     one taking a built-in's name raises :class:`~kinematics.plugins.PluginError`
     with one line naming the entry point.
 ``get_mechanism(name, **params)``
-    builds one mechanism from its geometric parameters.
+    builds one mechanism from its geometric parameters; an omitted fixed
+    parameter takes its documented default (``Mechanism.default_fixed``).
 ``resolve_mechanism(name_or_path)``
     the class of a registry name or of a ``"package.module:Class"`` path.
 """
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Iterator, Mapping
 
 from kinematics import plugins
@@ -69,6 +71,10 @@ MECHANISMS = MechanismRegistry(discover(__name__, __path__, Mechanism))
 def get_mechanism(name: str, **params: object) -> Mechanism:
     """Build the mechanism registered as ``name`` from keyword geometric parameters.
 
+    A fixed parameter left out takes its documented default (the class's
+    ``default_fixed``, e.g. the Gough-Stewart's ``r_base=400``), as
+    :meth:`~kinematics.base.Mechanism.from_design` does.
+
     Raises
     ------
     ValueError
@@ -79,8 +85,13 @@ def get_mechanism(name: str, **params: object) -> Mechanism:
         cls = MECHANISMS[name]
     except (KeyError, TypeError):
         raise ValueError(f"unknown mechanism {name!r}; allowed: {', '.join(MECHANISMS)}") from None
+    # only the defaults the constructor takes: a plug-in's from_design may map a fixed parameter
+    # to other constructor arguments (its constructor would refuse the name)
+    accepted = inspect.signature(cls).parameters
+    any_keyword = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in accepted.values())
+    defaults = {k: v for k, v in cls.with_default_fixed(params).items() if k in params or any_keyword or k in accepted}
     try:
-        return cls(**params)
+        return cls(**defaults)
     except TypeError as exc:  # wrong keyword: name the accepted ones
         raise ValueError(f"{cls.__name__}: {exc}") from None
 

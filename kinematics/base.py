@@ -38,6 +38,18 @@ from kinematics.conditioning import inverse_condition_number
 CONDITIONING_BLOCK = 8192
 
 
+def _filling_default_fixed(from_design):
+    """``from_design`` (a subclass's own) called with the omitted fixed parameters at their
+    defaults (:meth:`Mechanism.with_default_fixed`), so no mechanism repeats its defaults there."""
+
+    @functools.wraps(from_design)
+    def wrapper(cls, design, **fixed):
+        return from_design(cls, design, **cls.with_default_fixed(fixed))
+
+    wrapper._fills_default_fixed = True
+    return wrapper
+
+
 class Mechanism(ABC):
     """Abstract base of a parallel mechanism with ``dof`` actuators and pose variables.
 
@@ -60,6 +72,12 @@ class Mechanism(ABC):
         # one source: the defaults of mechanism.fixed come from the declared parameters
         if "fixed_parameters" in cls.__dict__:
             cls.default_fixed = {p.name: p.default for p in cls.fixed_parameters}
+        # one place for the documented defaults: a class's own from_design gets every fixed
+        # parameter its caller omits at its declared default (a caller of the library API gives
+        # the design variables alone, as the pipeline's mechanism.fixed would fill the rest)
+        own = cls.__dict__.get("from_design")
+        if isinstance(own, classmethod) and not getattr(own.__func__, "_fills_default_fixed", False):
+            cls.from_design = classmethod(_filling_default_fixed(own.__func__))
 
     # ------------------------------------------------------------------ checks
     def _check_poses(self, poses: np.ndarray) -> np.ndarray:
@@ -283,7 +301,24 @@ class Mechanism(ABC):
         of the same name; ``fixed`` supplies the other parameters.
         """
         values = {v.name: float(x) for v, x in zip(cls.design_variables, np.ravel(design))}
-        return cls(**fixed, **values)
+        return cls(**cls.with_default_fixed(fixed), **values)
+
+    @classmethod
+    def with_default_fixed(cls, params: dict[str, object]) -> dict[str, object]:
+        """``params`` with every omitted fixed parameter at its documented default.
+
+        Parameters
+        ----------
+        params : dict
+            Keyword arguments of :meth:`from_design` (fixed parameters) or of the
+            constructor; a value given here is kept as given.
+
+        Returns
+        -------
+        dict
+            :attr:`default_fixed` updated with ``params``.
+        """
+        return {**cls.default_fixed, **params}
 
     @property
     @abstractmethod

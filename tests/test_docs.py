@@ -1,8 +1,16 @@
-"""Generated documentation is current: the configuration reference is what the code writes now."""
+"""Generated documentation is current: the configuration reference is what the code writes now;
+the developer commands of docs/ (benchmarks, the reference's generator) run where the pages say."""
 
 from __future__ import annotations
 
+import importlib
+import os
+import shlex
+import subprocess
+import sys
 from pathlib import Path
+
+import pytest
 
 from pipeline.report.reference import experiment_summaries, reference_page
 
@@ -90,3 +98,106 @@ def test_the_documented_columns_are_the_registry_s_and_cover_best_s_per_variable
         unit, meaning = column_unit(column, {"a": "mm", "b": "deg"})
         assert unit == {"a": "mm", "b": "deg"}[column[0]] and f"design variable {column[0]}" in meaning, column
     assert "eta" not in written and "pm-design evaluate --parquet" in COLUMNS["eta"][1]
+
+
+# ----------------------------------------------------------------------------- developer commands
+def _benchmark_commands() -> list[str]:
+    """The commands of docs/benchmarks.md's bash block (comments and comment-only lines dropped)."""
+    import re
+
+    block = re.search(r"^```bash\n(.*?)^```", (ROOT / "docs" / "benchmarks.md").read_text(), flags=re.S | re.M)
+    lines = (line.split(" #", 1)[0].strip() for line in block.group(1).splitlines())
+    return [line for line in lines if line and not line.startswith("#")]
+
+
+def _run_from(command: str, cwd: Path, timeout: float):
+    """``command`` run by bash in ``cwd``, as a reader types it (``python`` is this environment's)."""
+    env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"}
+    return subprocess.run(["bash", "-c", command], cwd=cwd, env=env, capture_output=True, text=True, timeout=timeout)
+
+
+def test_benchmarks_page_says_where_its_commands_run():
+    """``benchmarks`` is a folder of the checkout, not an installed package: the page says to run its
+    commands from the checkout root, and every one of them names a script of that folder."""
+    text = " ".join((ROOT / "docs" / "benchmarks.md").read_text().split())
+    assert "Run these from the checkout root" in text and "No module named 'benchmarks'" in text
+    commands = _benchmark_commands()
+    assert commands and all(shlex.split(c)[:2] == ["python", "-m"] for c in commands), commands
+    for command in commands:
+        module = shlex.split(command)[2]
+        assert module.startswith("benchmarks.") and (ROOT / f"{module.replace('.', '/')}.py").is_file(), command
+
+
+@pytest.mark.parametrize("module, work", [("accuracy", "study"), ("external", "resolve_mechanism")])
+def test_benchmark_help_prints_usage_without_running(module, work, monkeypatch, capsys):
+    """``python -m benchmarks.accuracy --help`` started the six-minute run that rewrites
+    docs/accuracy.md: ``--help`` prints the usage (the docstring's first line) and exits 0 first."""
+    script = importlib.import_module(f"benchmarks.{module}")
+
+    def started(*args, **kwargs):
+        raise AssertionError(f"benchmarks.{module} --help started the benchmark")
+
+    monkeypatch.setattr(script, work, started)
+    monkeypatch.setattr(sys, "argv", [f"{module}.py", "--help"])
+    with pytest.raises(SystemExit) as exit_:
+        script.main()
+    assert exit_.value.code == 0
+    out = " ".join(capsys.readouterr().out.split())
+    assert out.startswith("usage:") and " ".join(script.__doc__.split("\n")[0].split()) in out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("command", _benchmark_commands())
+def test_every_benchmark_script_answers_help_from_the_checkout_root(command):
+    """Each documented script, from the checkout root, prints its usage and exits at once (nothing
+    run, no page rewritten)."""
+    pages = {p: p.stat().st_mtime_ns for p in (ROOT / "docs").glob("*.md")}
+    proc = _run_from(" ".join(shlex.split(command)[:3]) + " --help", ROOT, timeout=120)
+    assert proc.returncode == 0 and proc.stdout.startswith("usage:"), proc.stderr[-2000:]
+    assert pages == {p: p.stat().st_mtime_ns for p in (ROOT / "docs").glob("*.md")}
+
+
+@pytest.mark.slow
+def test_a_benchmark_command_runs_verbatim_from_the_checkout_root(tmp_path):
+    """docs/benchmarks.md's cheapest command, verbatim, where the page says to run it; from an empty
+    folder it cannot run (which is why the page says where)."""
+    command = next(c for c in _benchmark_commands() if c.startswith("python -m benchmarks.kinematics"))
+    proc = _run_from(command, ROOT, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    lines = proc.stdout.splitlines()
+    assert lines[0].split() == ["mechanism", "kernel", "poses/s"] and len(lines) > 2, proc.stdout
+    elsewhere = _run_from(command, tmp_path, timeout=120)
+    assert elsewhere.returncode != 0 and "No module named 'benchmarks'" in elsewhere.stderr
+
+
+# ------------------------------------------------------------------ python -m pipeline.report.reference
+def test_reference_command_writes_the_checkout_s_page_from_any_folder(tmp_path, monkeypatch, capsys):
+    """``python -m pipeline.report.reference`` from an empty folder ended in a FileNotFoundError
+    traceback (it wrote to ``docs/`` of the working folder): it writes the source checkout's page,
+    whatever the folder (here redirected, not to overwrite the real page)."""
+    from pipeline.report import reference
+
+    assert reference.PAGE == ROOT / "docs" / "configuration.md"
+    checkout = tmp_path / "checkout" / "docs"
+    checkout.mkdir(parents=True)
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    monkeypatch.chdir(empty)
+    monkeypatch.setattr(reference, "PAGE", checkout / "configuration.md")
+    assert reference.main([]) == 0
+    assert (checkout / "configuration.md").read_text() == reference.reference_page()
+    assert capsys.readouterr().out.strip() == str(checkout / "configuration.md")
+    assert not any(empty.iterdir())  # no stray docs/ where it was run
+
+
+def test_reference_command_refuses_a_missing_folder_in_one_line(tmp_path, monkeypatch, capsys):
+    """An installed package has no docs/ beside it: one line naming --out, no traceback, no file."""
+    from pipeline.report import reference
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(reference, "PAGE", tmp_path / "site-packages" / "docs" / "configuration.md")
+    for argv in ([], ["--out", str(tmp_path / "nowhere" / "configuration.md")]):
+        assert reference.main(argv) == 2
+        lines = capsys.readouterr().err.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("error: --out=") and "allowed:" in lines[0], lines
+    assert not any(tmp_path.iterdir())

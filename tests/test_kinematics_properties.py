@@ -163,7 +163,7 @@ def test_length_changes_inverse_condition_only_for_angular_mechanisms():
             "'rho_min'",
         ),
         ("rpr2", dict(b=5.0, q_min=6.0, q_max=float("inf")), "'q_max'"),
-        ("rpr2", dict(b=5.0, q_min=6.0), "q_max"),
+        ("rpr2", dict(q_min=6.0, q_max=9.6), "b"),  # a design variable left out (a fixed one takes its default)
     ],
 )
 def test_bad_parameters_name_the_field(name, params, field):

@@ -81,3 +81,43 @@ def test_tricept_readings_act_and_keep_the_kinematics():
     assert np.min(np.abs(sols - pose).max(axis=1)) < 1e-8  # IK∘FK round trip under the reading
     with pytest.raises(ValueError, match="offset_side"):
         get_mechanism("tricept", **designs, offset_side=0)
+
+
+@pytest.mark.parametrize("name", sorted(MECHANISMS.builtins))
+def test_documented_fixed_defaults_apply_when_omitted(name):
+    """The library API fills every omitted fixed parameter with its documented default (the
+    Gough-Stewart's ``r_base=400`` raised a TypeError): ``from_design`` of the design variables
+    alone, and ``get_mechanism`` of the constructor's other parameters, build the same mechanism
+    as with the defaults given explicitly; a value given still wins."""
+    from tests.conftest import POSE_BOXES, random_poses
+
+    cls = MECHANISMS[name]
+    centre = [0.5 * (v.lower + v.upper) for v in cls.design_variables]
+    explicit = cls.from_design(centre, **cls.default_fixed)
+    poses = random_poses(name, 50, seed=3)
+    assert len(POSE_BOXES[name][0]) == cls.dof
+    for built in (
+        cls.from_design(centre),
+        get_mechanism(name, **{k: v for k, v in explicit.params().items() if k not in cls.default_fixed}),
+    ):
+        assert repr(built) == repr(explicit)
+        np.testing.assert_array_equal(built.inverse(poses), explicit.inverse(poses))
+    # a value the caller gives is kept (the last non-zero numeric fixed parameter, moved by 5 %:
+    # the first ones are lower limits whose upper partner a move to mid-range would pass)
+    numeric = [p for p in cls.fixed_parameters if not p.choices and isinstance(p.default, float) and p.default]
+    numeric = numeric[-1]
+    other = 1.05 * numeric.default
+    assert numeric.accepts(other)
+    assert cls.from_design(centre, **{numeric.name: other}).params() != explicit.params()
+    assert (
+        cls.from_design(centre, **{numeric.name: other}).params()
+        == cls.from_design(centre, **{**cls.default_fixed, numeric.name: other}).params()
+    )
+
+
+def test_gough_stewart_library_api_takes_r_base_400_by_default():
+    """The user's calls: no TypeError, r_base is the documented 400 mm."""
+    by_name = get_mechanism("gough_stewart", r_platform=250, sep_base=30, sep_platform=30, height=700)
+    by_design = MECHANISMS["gough_stewart"].from_design([250, 30, 30, 700])
+    assert by_name.params()["r_base"] == by_design.params()["r_base"] == 400.0
+    assert by_name.params() == by_design.params()

@@ -60,11 +60,31 @@ def test_compare_groups_by_objective_w_d_and_optimiser():
     assert ga_v[2] == 2 and ga_v[4] == 11304.0
     assert ga_v[5] == f"{150.0:.4g} ± {np.std([100.0, 200.0], ddof=1):.2g}"
     assert ga_v[6] == f"{100 * (150.0 - 11304.0) / 11304.0:+.1f} %"
-    assert by[("Table 3 (w_d = 0.5)", "cmaes", "d")][5] == "2"  # one run: no spread
+    assert by[("Table 3 (w_d = 0.5)", "cmaes", "d (cm)")][5] == "2"  # one run: no spread; d in cm (param_d_cm)
     assert by[("Table 1 (max V)", "ga", "gdi")][5] == "0.5"  # the volume objective, whatever w_d
-    assert by[("Table 3 (w_d = 0.25)", "ga", "Qz")][5] == "40"
+    assert by[("Table 3 (w_d = 0.25)", "ga", "Qz (cm)")][5] == "40"
     assert ("Table 2 (max GDI)", "-", "-") in by  # no gdi runs: said so
     assert not any(r[1] == "ga" and r[3] == "gdi" and r[5] == "0.9" for r in rows)  # the Tricept row is not H4's
+
+    assert by[("Table 3 (w_d = 0.5)", "ga", "gdi")][3] == "gdi"  # unitless: no unit
+
+
+def test_compare_labels_a_design_variable_with_the_mechanism_s_unit():
+    """A printed design quantity that is a design variable column (the Tricept's ``a``, not a
+    ``param_<name>_<unit>`` column) takes its unit from the mechanism's design variables."""
+    paper = {"mechanism": "tricept", "rows": [{"table": "T", "objective": "volume", "a": 250.0, "gdi": 0.5}]}
+    best = pd.DataFrame(
+        {
+            "mechanism": ["tricept"] * 2,
+            "objective": ["volume"] * 2,
+            "w_d": [0.0] * 2,
+            "optimizer": ["ga"] * 2,
+            "volume": [1.0, 2.0],
+            "gdi": [0.4, 0.6],
+            "a": [240.0, 260.0],
+        }
+    )
+    assert {r[3] for r in compare(best, paper)} == {"a (mm)", "gdi"}
 
 
 def test_table3_multirun_then_report(tmp_path):
@@ -172,7 +192,8 @@ def test_report_leaves_out_debug_runs_counts_a_repeat_once_and_keeps_studies_apa
     assert (
         f"| Table 3 (w_d = 0.5) | ga [48bd74] | 2 | V (cm³·rad) | 11304 | {150.0:.4g} ± {50.0 * 2**0.5:.2g} |" in text
     )
-    assert "| Table 3 (w_d = 0.5) | ga [48bd74] | 2 | d | 12.6 | 12 ± 2.8 |" in text
+    assert "| Table 3 (w_d = 0.5) | ga [48bd74] | 2 | d (cm) | 12.6 | 12 ± 2.8 |" in text
+    assert "| Table 3 (w_d = 0.5) | ga [48bd74] | 2 | h (cm) | " in text and "| Qz (cm) | " in text
     assert "| Table 3 (w_d = 0.5) | ga [33d895] | 1 | V (cm³) | 11304 | 5000 |" in text
     assert "0.9" not in text and "Debug runs only" not in text  # the debug run left out, and not a smoke test
     smoke = best.assign(purpose="debug")

@@ -23,10 +23,14 @@ from kinematics import MECHANISMS
 from kinematics.base import Mechanism
 from pipeline import CONFIG_DIR
 from pipeline.config import schema
+from pipeline.errors import RunError
 from pipeline.objectives import OBJECTIVES
 from pipeline.optimizers import OPTIMIZERS
 from pipeline.store import parquet
 
+#: where the page lives: docs/ of the source checkout this package sits in (found from this file,
+#: as the benchmarks find theirs), so the command writes the same file from any folder
+PAGE = Path(__file__).resolve().parents[2] / "docs" / "configuration.md"
 #: the sections of the top-level config, in the order of the page
 SECTIONS = (
     ("sample", schema.SampleConfig),
@@ -231,10 +235,26 @@ def units_rule() -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Write the page (``--out``, default :data:`PAGE`); 2 and a one-line error if it cannot."""
     parser = argparse.ArgumentParser(prog="python -m pipeline.report.reference", description=__doc__.split("\n")[0])
-    parser.add_argument("--out", type=Path, default=Path("docs/configuration.md"), help="output file")
+    parser.add_argument(
+        "--out", type=Path, default=PAGE, help="output file (default: docs/configuration.md of the source checkout)"
+    )
     args = parser.parse_args(argv)
-    args.out.write_text(reference_page())
+    if not args.out.parent.is_dir():
+        # an installed package has no docs/ beside it: refuse rather than create a stray folder
+        print(
+            f"error: --out={str(args.out)!r} is invalid: its folder {args.out.parent} does not exist "
+            "(the default is the docs/ of a source checkout); allowed: a file in an existing folder",
+            file=sys.stderr,
+        )
+        return 2
+    text = reference_page()  # the whole page first: a failure leaves no partial file
+    try:
+        parquet.write_text(args.out, text)
+    except RunError as exc:
+        print(f"error: --out: {exc}", file=sys.stderr)
+        return 2
     print(args.out)
     return 0
 

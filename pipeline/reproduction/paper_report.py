@@ -6,11 +6,11 @@ left out), counts each repeat of a run once, keeps the runs of the paper's mecha
 each printed table row (:mod:`pipeline.reproduction.papers`) the runs of the same objective (and
 ``w_d`` for the mixed index), one line per optimiser and study (an experiment run with an
 override, another orientation say, is another study: its line carries the first digits of its
-``study_hash``): how many runs, and for V (in its unit), GDI and each
-design variable the paper's number, ours as mean ± sample standard deviation (n − 1) over
-the runs, and the relative difference. Rows without runs in the dataset say
-so. It compares; it does not claim a reproduction: each paper file's header
-says what its numbers mean (e.g. the H4 paper's V in cm³ as printed, ours in
+``study_hash``): how many runs, and for V, GDI and each design variable (V and the design
+variables labelled with their units, read from the data: ``d (cm)``) the paper's number, ours as
+mean ± sample standard deviation (n − 1) over the runs, and the relative difference. Rows
+without runs in the dataset say so. It compares; it does not claim a reproduction: each paper
+file's header says what its numbers mean (e.g. the H4 paper's V in cm³ as printed, ours in
 cm³·rad), and ``docs/reproduction.md`` explains every difference.
 
 Typical use: ``python -m pipeline -m +experiment=h4_table3`` (the multirun
@@ -27,12 +27,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from kinematics import MECHANISMS
 from pipeline.errors import ConfigError
 from pipeline.report.html import read_studies
 from pipeline.report.tables import rel, table
 from pipeline.reproduction.papers import load_paper, paper_names
 from pipeline.stages.plot import distinct_seeds, study_labels, with_study
-from pipeline.store.parquet import PARAM_UNITS
+from pipeline.store.parquet import PARAM_UNITS, column_unit
 
 #: printed quantity -> dataset column (design quantities: :func:`_design_column`)
 QUANTITIES = {"V": "volume", "gdi": "gdi", "lci_min": "inverse_condition_min", "lci_max": "inverse_condition_max"}
@@ -65,6 +66,30 @@ def _design_column(best: pd.DataFrame, name: str) -> str:
     )
 
 
+def _design_units(mechanism: str) -> dict[str, str]:
+    """``{design variable: unit}`` of a registered mechanism (empty for an unknown name: the
+    ``param_<name>_<unit>`` columns still carry theirs)."""
+    try:
+        cls = MECHANISMS[mechanism]
+    except (KeyError, ValueError):  # ValueError: a broken plug-in (kinematics.plugins.PluginError)
+        return {}
+    return {v.name: v.unit for v in cls.design_variables}
+
+
+def _label(key: str, column: str, group: pd.DataFrame, units: dict[str, str]) -> str:
+    """The printed quantity with its unit from the data: V's from the runs' ``volume_unit``, a
+    design quantity's from its column (``param_d_cm``: cm; a design variable: the mechanism's
+    unit of it); a unitless quantity (GDI) as is."""
+    if key == "V":
+        found = sorted(set(group["volume_unit"].astype(str))) if "volume_unit" in group else []
+    elif key in QUANTITIES:
+        found = []
+    else:
+        found = [column_unit(column, units)[0]]
+    found = [u for u in found if u and u != "1"]
+    return f"{key} ({', '.join(found)})" if found else key
+
+
 def compare(best: pd.DataFrame, paper: dict) -> list[list]:
     """Rows ``[table, optimiser, runs, quantity, paper, ours (mean ± sd), difference]``.
 
@@ -77,6 +102,7 @@ def compare(best: pd.DataFrame, paper: dict) -> list[list]:
         A paper's reference data (:func:`pipeline.reproduction.papers.load_paper`).
     """
     out = []
+    units = _design_units(paper["mechanism"])
     for row in paper["rows"]:
         runs = _matching(best, paper["mechanism"], row)
         if runs.empty:
@@ -95,8 +121,7 @@ def compare(best: pd.DataFrame, paper: dict) -> list[list]:
                 mean = float(values.mean())
                 spread = float(values.std(ddof=1)) if len(values) > 1 else math.nan
                 ours = f"{mean:.4g} ± {spread:.2g}" if len(values) > 1 else f"{mean:.4g}"
-                units = sorted(set(group["volume_unit"].astype(str))) if "volume_unit" in group else []
-                quantity = f"{key} ({', '.join(units)})" if key == "V" and units else key
+                quantity = _label(key, column, group, units)
                 out.append([row["table"], optimizer, len(values), quantity, row[key], ours, rel(mean, row[key])])
     return out
 
