@@ -280,3 +280,95 @@ def test_another_objective_on_a_mixed_experiment_takes_its_own_w_d():
 
     assert validate(_compose(["+experiment=h4_mixed", "objective=volume"])).objective.w_d == 0.0
     assert validate(_compose(["+experiment=h4_max_gdi"])).objective.w_d == 1.0
+
+
+def test_a_default_resolution_over_the_node_budget_is_named_as_the_default_with_its_fixes(capsys):
+    """The user set no evaluate.resolution: the message says whose default it is (mechanism,
+    orientation, method) and lists settings that pass, each of which does."""
+    from pipeline.cli.evaluate import _compose_evaluate, evaluate_overrides
+    from pipeline.config import validate
+
+    register_configs()
+    argv = [
+        "mechanism=gough_stewart",
+        "r_platform=250",
+        "sep_base=30",
+        "sep_platform=30",
+        "height=700",
+        "mechanism.orientation=[-5,5]",
+    ]
+    assert evaluate_command(argv) == 2
+    err = _one_line(capsys)
+    # the resolution the user never typed (5 when this was reported) is the mechanism's default
+    assert err.startswith(
+        "error: evaluate.resolution=5 (not set: the default of gough_stewart at mechanism.orientation=[-5, 5], "
+        "method grid) is invalid: allowed <= "
+    ), err
+    fixes = err.rsplit("; allowed: ", 1)[1].split(", or ")
+    assert fixes[0].startswith("evaluate.max_nodes=") and "mechanism.orientation=null" in fixes[-1], fixes
+    assert any(f.startswith("evaluate.resolution=") and "evaluate.allow_coarse=true" in f for f in fixes), fixes
+    for fix in fixes:  # each named setting passes the check
+        given = [w for w in fix.replace(" with ", " ").split() if "=" in w]
+        validate(_compose_evaluate(evaluate_overrides([*argv, *given])[2]))
+    # a resolution the user did set is named as theirs, as before
+    assert evaluate_command([*argv, "evaluate.resolution=5", "evaluate.allow_coarse=true"]) == 2
+    err = _one_line(capsys)
+    assert err.startswith("error: evaluate.resolution=5 is invalid: allowed <= "), err
+    assert "for gough_stewart (6 sampled axes" in err, err
+    assert "default" not in err, err
+
+
+@pytest.mark.parametrize("key, mode", [("hydra.run.dir", []), ("hydra.sweep.dir", ["-m", "objective.w_d=0,1"])])
+def test_an_unusable_run_or_sweep_dir_is_refused_before_hydra(key, mode, tmp_path, capsys):
+    """A folder under a regular file (root writes anywhere else): the same one line for the
+    sweep's folder as for a run's, not the OSError of the sweeper's mkdir (exit 1)."""
+    not_a_folder = tmp_path / "file"
+    not_a_folder.write_text("")
+    err = _refused([*mode, "+experiment=rpr2_mixed", "+debug=fast", f"{key}={not_a_folder / 'sw'}"], capsys)
+    assert err.startswith(f"error: {key}='{not_a_folder / 'sw'}' is invalid: ") and err.endswith(
+        "allowed: a writable directory"
+    ), err
+    assert [p.name for p in tmp_path.iterdir()] == ["file"]
+
+
+def test_the_sweeper_refuses_an_unusable_sweep_dir_before_any_job(tmp_path, capsys):
+    """Launches that bypass the command line's precheck (the reproduction's) meet the same check
+    in the sweeper, before it composes a job or creates the folder."""
+    from omegaconf import OmegaConf
+
+    from pipeline.sweeps.sweeper import CheckedSweeper
+
+    not_a_folder = tmp_path / "file"
+    not_a_folder.write_text("")
+    sweeper = CheckedSweeper()
+    sweeper.config = OmegaConf.create({"hydra": {"sweep": {"dir": str(not_a_folder / "sw")}}})
+    with pytest.raises(SystemExit) as exit_info:
+        sweeper.sweep(["objective.w_d=0,1"])
+    assert exit_info.value.code == 2
+    err = _one_line(capsys)
+    assert err.startswith("error: hydra.sweep.dir=") and "allowed: a writable directory" in err, err
+
+
+@pytest.mark.parametrize("typed", ["mechanism.fixed.q_max=1000", "+mechanism.fixed.q_max=1000"])
+def test_a_fixed_parameter_shared_by_a_sweep_over_mechanisms_is_told_to_use_plus_plus(typed, tmp_path, capsys):
+    """Hydra's advice for either spelling is the other, which fails too; ++ is what works."""
+    sweep = ["-m", "mechanism=rpr2,gough_stewart", "+debug=fast", f"hydra.sweep.dir={tmp_path / 'sw'}"]
+    err = _refused([*sweep, typed], capsys)
+    assert err.startswith(f"error: {typed} is invalid in a sweep over mechanism: "), err
+    assert "allowed: ++mechanism.fixed.q_max=1000" in err and "To append" not in err, err
+    precheck_overrides([*sweep, "++mechanism.fixed.q_max=1000"])  # the advice passes
+
+
+def test_plus_plus_on_a_swept_mechanism_without_the_key_names_the_mechanism_and_the_key():
+    """++ adds the key to every job's mechanism: the job whose mechanism lacks it (h4 has no
+    q_max) is refused by the check the sweeper runs on every job, in one line."""
+    from pipeline.cli.precheck import _compose
+    from pipeline.config import validate
+    from pipeline.errors import ConfigError
+
+    register_configs()
+    with pytest.raises(ConfigError) as refused:
+        validate(_compose(["mechanism=h4", "++mechanism.fixed.q_max=1000", "+debug=fast"]))
+    message = str(refused.value)
+    assert message.startswith("mechanism.fixed.q_max=1000 is invalid: allowed keys ") and message.endswith("for h4")
+    assert "\n" not in message

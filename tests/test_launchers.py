@@ -136,3 +136,17 @@ def test_slurm_without_slurm_is_one_line_and_writes_nothing(tmp_path):
     assert "\n" not in err and "Traceback" not in err, err
     assert err.startswith("error: hydra/launcher=submitit_slurm is invalid here: no SLURM"), err
     assert not any(p.is_file() for p in tmp_path.rglob("*"))
+
+
+def test_an_unusable_sweep_dir_is_one_line_exit_2_and_writes_nothing(tmp_path):
+    """As hydra.run.dir: a sweep folder that cannot be created (under a regular file; root writes
+    anywhere else) is refused before Hydra starts, not by the sweeper's mkdir (exit 1)."""
+    not_a_folder = tmp_path / "file"
+    not_a_folder.write_text("")
+    proc = sweep(tmp_path / "out", [f"hydra.sweep.dir={not_a_folder / 'sw'}"])
+    assert proc.returncode == 2, proc.stderr
+    err = proc.stderr.strip()
+    assert "\n" not in err and "Traceback" not in err, err
+    assert err.startswith(f"error: hydra.sweep.dir='{not_a_folder / 'sw'}' is invalid: "), err
+    assert err.endswith("allowed: a writable directory"), err
+    assert [p.name for p in tmp_path.iterdir()] == ["file"]

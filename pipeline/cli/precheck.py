@@ -9,6 +9,7 @@ line, exit 2.
 from __future__ import annotations
 
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -49,7 +50,10 @@ def precheck_overrides(argv: list[str]) -> None:
     Single run: composes the config, :func:`validate` it, refuses an
     unwritable or already used ``hydra.run.dir``. Sweep (``-m``): composes
     the first job and, one at a time, every value of each swept key (each
-    job is checked again by the sweeper). Both: what the config may
+    job is checked again by the sweeper), then the config Hydra composes
+    before the sweep (a shared ``mechanism.fixed.*`` override of a sweep over
+    ``mechanism`` is told to use ``++``), and refuses an unwritable
+    ``hydra.sweep.dir``. Both: what the config may
     instantiate (:mod:`pipeline.config.guard`). Flags that only print
     (``--help``, ``--cfg``, ...) skip the check; flags that would load config
     from elsewhere (``--config-dir``, ``--experimental-rerun``, ...) are refused.
@@ -67,8 +71,17 @@ def precheck_overrides(argv: list[str]) -> None:
             )
         if flags:
             # each job's values are validated by the sweeper, which names the job
-            for number, job_overrides in _probe_jobs(overrides):
-                guard.check_hydra_node(_compose_job(job_overrides, number).hydra)
+            try:
+                for number, job_overrides in _probe_jobs(overrides):
+                    guard.check_hydra_node(_compose_job(job_overrides, number).hydra)
+                sweep = _compose_sweep(overrides)
+            except (HydraException, OmegaConfBaseException) as exc:
+                message = shared_fixed_message(exc, overrides)
+                if message is None:
+                    raise
+                raise ConfigError(message) from None
+            # as hydra.run.dir below: the sweeper would create it only after composing every job
+            check_writable("hydra.sweep.dir", Path(sweep.hydra.sweep.dir))
             return
         _probe_jobs(overrides)  # the keys' check
         cfg = _compose_job(overrides, None)
@@ -95,6 +108,53 @@ def _compose_job(overrides: list[str], number: int | None) -> DictConfig:
         if message is None:
             raise
         raise ConfigError(message if number is None else f"{job_label(number, overrides)}: {message}") from None
+
+
+def _compose_sweep(overrides: list[str]) -> DictConfig:
+    """The config Hydra composes for a sweep (``-m``) before its sweeper runs: the overrides that
+    sweep nothing, with each swept group at its default (Hydra's own loader, in multirun mode)."""
+    from hydra import initialize_config_dir
+    from hydra.core.global_hydra import GlobalHydra
+    from hydra.types import RunMode
+
+    register_configs()
+    with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3", job_name="pm-design"):
+        loader = GlobalHydra.instance().config_loader()
+        return loader.load_configuration(config_name="config", overrides=list(overrides), run_mode=RunMode.MULTIRUN)
+
+
+#: Hydra's errors about a ``mechanism.fixed.*`` override: the key is missing (``=``) or already there (``+``)
+_FIXED_KEY = re.compile(r"(?:Could not override|An item is already at) '(mechanism\.fixed\.[^']+)'")
+
+
+def shared_fixed_message(exc: BaseException, overrides: list[str]) -> str | None:
+    """The one line for a ``mechanism.fixed.KEY`` override that a sweep over ``mechanism`` shares
+    (None: another error).
+
+    Hydra sets such an override twice: on the config composed before the sweep (the default
+    mechanism's parameters), then on each job's (the swept mechanism's). ``KEY=V`` fails where a
+    mechanism lacks the key, ``+KEY=V`` where it has it, and Hydra's advice swaps one for the
+    other; ``++KEY=V`` sets or adds it in both (a job whose mechanism lacks the key is then
+    refused by :func:`pipeline.config.validate`, naming the mechanism and the key).
+    """
+    from hydra.core.override_parser.overrides_parser import OverridesParser
+
+    found = _FIXED_KEY.search(str(exc))
+    if found is None:
+        return None
+    parsed = OverridesParser.create().parse_overrides(overrides)
+    if not any(o.key_or_group == "mechanism" and o.is_sweep_override() for o in parsed):
+        return None
+    key = found.group(1)
+    typed = next((o.input_line for o in parsed if o.key_or_group == key), None)
+    if typed is None:
+        return None
+    value = typed.split("=", 1)[1]
+    return (
+        f"{typed} is invalid in a sweep over mechanism: Hydra sets it on the default mechanism before "
+        f"the sweep and on each job's, and = or + fails on one of them; allowed: ++{key}={value} "
+        f"(each swept mechanism must have {key.rpartition('.')[2]})"
+    )
 
 
 def _compose(overrides: list[str]) -> DictConfig:

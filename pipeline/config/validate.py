@@ -31,6 +31,9 @@ NODES_PER_SECOND = 1.0e6
 #: boundary cells (coarse pass, bisections, cut-cell fractions) cost 2x (Tricept) to 5x (H4)
 #: per node at the mechanisms' default resolutions (docs/accuracy.md, "Measured")
 METHOD_COST = {"midpoint": 1.0, "grid": 5.0}
+#: the largest evaluate.max_nodes the schema accepts (EvaluateConfig's range check): a larger
+#: budget is suggested only up to it
+MAX_NODES = 10**9
 
 
 def _refuse_unknown_keys(node: DictConfig, schema: type, prefix: str) -> None:
@@ -137,10 +140,18 @@ def _check_budget(c: Config, mech) -> None:
             c.evaluate.max_nodes ** (1 / n_axes) / c.evaluate.refine_factor,
             lambda r: nodes_at(r * c.evaluate.refine_factor) <= c.evaluate.max_nodes,
         )
-        raise ConfigError(
-            f"evaluate.resolution={res} is invalid: allowed <= {top} for {c.mechanism.name} "
+        budget = (
             f"({n_axes} sampled axes x refine_factor {c.evaluate.refine_factor} give "
             f"{refined_nodes:.3g} nodes > evaluate.max_nodes={c.evaluate.max_nodes})"
+        )
+        if c.evaluate.resolution is not None:
+            raise ConfigError(f"evaluate.resolution={res} is invalid: allowed <= {top} for {c.mechanism.name} {budget}")
+        # the user set no resolution: naming 5 alone reads as a value they typed, so the message
+        # says whose default it is and lists the settings that pass
+        raise ConfigError(
+            f"evaluate.resolution={res} (not set: the default of {_default_of(c, method)}) is invalid: "
+            f"allowed <= {top} for {c.mechanism.name} {budget}; allowed: "
+            + ", or ".join(_node_budget_fixes(c, mech, res, top, nodes_at))
         )
     evaluations = c.sample.n + OPTIMIZERS[c.optimizer.name](c.optimizer).expected_evaluations()
     evaluations += c.optimizer.polish_evaluations if c.optimizer.polish else 0
@@ -189,6 +200,47 @@ def _check_budget(c: Config, mech) -> None:
         f"parallel.n_jobs={c.parallel.n_jobs}; cached stages counted too); "
         f"allowed: {', or '.join(fixes)}"
     )
+
+
+def _default_of(c: Config, method: str) -> str:
+    """Whose default resolution this is: the mechanism's, at the orientation range (it sets how
+    many axes are sampled) and the integration method."""
+    orientation = c.mechanism.orientation
+    at = f" at mechanism.orientation=[{', '.join(f'{a:g}' for a in orientation)}]" if orientation is not None else ""
+    return f"{c.mechanism.name}{at}, method {method}"
+
+
+def _node_budget_fixes(c: Config, mech, res: int, top: int, nodes_at: Callable[[int], int]) -> list[str]:
+    """The settings that pass the node budget when the default resolution ``res`` does not: a
+    larger ``evaluate.max_nodes``, a smaller ``evaluate.refine_factor``, an explicit coarser
+    ``evaluate.resolution``, or the mechanism's default orientation (fewer sampled axes).
+    ``nodes_at`` gives the nodes of one evaluation at a resolution (the run's orientation and method)."""
+    from kinematics.workspace import default_resolution, grid_nodes
+
+    e = c.evaluate
+    fixes = []
+    refined_nodes = nodes_at(res * e.refine_factor)
+    if refined_nodes <= MAX_NODES:
+        fixes.append(f"evaluate.max_nodes={refined_nodes}")
+    factors = [f for f in range(e.refine_factor - 1, 1, -1) if nodes_at(res * f) <= e.max_nodes]
+    if factors:
+        fixes.append(f"evaluate.refine_factor={factors[0]}")
+    if top >= 1:
+        coarse = top < mech.min_resolution and not e.allow_coarse
+        fixes.append(
+            f"evaluate.resolution={top}"
+            + (
+                f" with evaluate.allow_coarse=true (below {c.mechanism.name}'s minimum {mech.min_resolution})"
+                if coarse
+                else ""
+            )
+        )
+    if c.mechanism.orientation is not None:
+        plain = mech.default_orientation
+        plain_res = default_resolution(mech, plain, None, e.method)
+        if grid_nodes(mech, plain_res * e.refine_factor, plain, None, e.method) <= e.max_nodes:
+            fixes.append(f"mechanism.orientation=null (the default of {c.mechanism.name}: fewer sampled axes)")
+    return fixes
 
 
 def _largest_resolution(estimate: float, fits: Callable[[int], bool]) -> int:

@@ -6,7 +6,7 @@
   one line naming the job's overrides and the field, exit 2, nothing written;
   only then are the jobs launched, in batches of ``max_batch_size``;
 * a sweep directory that already holds anything is refused (no mixing of
-  stale runs into a new sweep);
+  stale runs into a new sweep), and so is one that cannot be created or written;
 * a job that fails at run time does not stop the sweep (the task records it
   in its manifest and returns); at the end the completed jobs are
   aggregated (:func:`finish_sweep`) into ``paths.dataset_dir``, ``tradeoff.png``
@@ -42,7 +42,7 @@ from omegaconf import DictConfig, OmegaConf, open_dict
 from omegaconf.errors import OmegaConfBaseException
 
 from pipeline.config.jobs import batches, declared_overrides, sweep_jobs
-from pipeline.errors import ConfigError, RunError
+from pipeline.errors import ConfigError, RunError, check_writable
 
 log = logging.getLogger(__name__)
 
@@ -122,6 +122,9 @@ class CheckedSweeper(Sweeper):
                     f"allowed: a new directory (the default makes one per launch)"
                 )
             try:
+                # before any job is composed: the mkdir below would fail after the checks, with a
+                # bare OSError (a launch that bypasses the command line's precheck, the reproduction's)
+                check_writable("hydra.sweep.dir", sweep_dir)
                 jobs = sweep_jobs(declared_overrides(self.params, arguments), self.hydra_context.config_loader)
                 planned = batches(jobs, self.max_batch_size)
             except ConfigError as exc:
