@@ -32,7 +32,7 @@ from matplotlib.ticker import NullFormatter  # noqa: E402
 
 from benchmarks.best_known import load as load_best_known  # noqa: E402
 from kinematics import MECHANISMS, get_mechanism  # noqa: E402
-from kinematics.workspace import default_resolution, evaluate  # noqa: E402
+from kinematics.workspace import default_resolution, evaluate, grid_nodes  # noqa: E402
 
 #: the reference resolution, in multiples of the default
 REFERENCE_FACTOR = 4
@@ -482,6 +482,8 @@ def study(name: str) -> dict:
         rows=rows,
         cross=np.max(cross, axis=0),
         calibration=calibration,
+        designs=[mech for _, mech in cases],
+        refs=refs,
     )
 
 
@@ -490,11 +492,13 @@ def scan(name: str) -> dict:
     (seed :data:`SCAN_SEED`), against the new method at :data:`REFERENCE_FACTOR` x the finer
     of the two defaults."""
     errors: dict[str, list] = {method: [] for method in METHODS}
-    suri, estimate = [], []
+    suri, estimate, mechs, refs = [], [], [], []
     for _, mech in random_designs(name, SCAN_SEED, SCAN, "scan"):
         r0 = max(default_resolution(mech, method=method) for method in METHODS)
         reference = evaluate(mech, resolution=REFERENCE_FACTOR * r0, method="grid", error_estimate=False)
         ref = quantities(reference)
+        mechs.append(mech)
+        refs.append(ref)
         suri.append(reference.suri)
         for method in METHODS:
             ev = evaluate(mech, method=method, error_estimate=method == "grid")
@@ -504,7 +508,65 @@ def scan(name: str) -> dict:
     return {method: np.array(e) for method, e in errors.items()} | {
         "suri": np.array(suri),
         "estimate": np.array(estimate),
+        "designs": mechs,
+        "refs": refs,
     }
+
+
+#: the opt-in rule ``evaluate(method="margins")`` (kinematics.margin_cells, not a default yet):
+#: its resolutions per mechanism, the grid method's default (None) and about a third of its nodes
+MARGIN_RESOLUTIONS = {"delta": (None, 21, 18), "gough_stewart": (None, 22), "tricept": (None, 20)}
+
+
+def margins_study(r: dict) -> list[dict]:
+    """``evaluate(method="margins")`` at :data:`MARGIN_RESOLUTIONS` on the ladder's and the scan's
+    designs of ``r`` (:func:`study` with its ``scan``), against the same references: per resolution
+    the largest error of V, GDI and eta, the designs over the target, and the cost on the paper
+    design against the old default (timed alternately, as the ladder)."""
+    name = r["name"]
+    mechs = r["designs"] + r["scan"]["designs"]
+    refs = r["refs"] + r["scan"]["refs"]
+    paper = r["designs"][0]
+    rows = []
+    for resolution in MARGIN_RESOLUTIONS.get(name, ()):
+        errors = np.array(
+            [
+                np.abs(quantities(evaluate(m, resolution=resolution, method="margins", error_estimate=False)) / ref - 1)
+                for m, ref in zip(mechs, refs)
+            ]
+        )
+        res = resolution or default_resolution(paper, method="margins")
+        evaluate(paper, resolution=res, method="margins", error_estimate=False)  # compile, warm
+        times = alternate_times(paper, {"midpoint": None, "margins": res})
+        rows.append(
+            dict(
+                name=name,
+                resolution=res,
+                default=resolution is None,
+                nodes=grid_nodes(paper, res, method="margins"),
+                designs=len(mechs),
+                max=errors.max(axis=0),
+                over=int((errors.max(axis=1) > ERROR_TARGET).sum()),
+                cost=times["margins"] / times["midpoint"],
+            )
+        )
+    return rows
+
+
+def margins_table(results: list[dict]) -> str:
+    lines = [
+        "| mechanism | resolution (nodes) | designs | max error V / GDI / eta | designs over "
+        f"{100 * ERROR_TARGET:g} % | cost vs old default |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    for r in results:
+        for row in r.get("margins", []):
+            label = f"{row['resolution']}{' (the grid default)' if row['default'] else ''}, {row['nodes']}"
+            lines.append(
+                f"| {row['name']} | {label} | {row['designs']} | {percentages(row['max'])} | {row['over']} | "
+                f"{row['cost']:.2f}x |"
+            )
+    return "\n".join(lines)
 
 
 #: the new method's phases, by the functions of kinematics.workspace that run them
@@ -712,6 +774,7 @@ def main() -> None:
         r = study(name)
         r["scan"] = scan(name)
         r["phases"] = phases(name)
+        r["margins"] = margins_study(r)
         results.append(r)
         print(
             f"{name}: designs {', '.join(r['cases'])}; reference at resolution {REFERENCE_FACTOR * r['r0']}, "
@@ -730,6 +793,11 @@ def main() -> None:
         + scan_table(results)
         + "\n\n"
         + scan_calibration(results)
+        + '\n\nThe opt-in rule `evaluate(method="margins")` (linear margins, `kinematics.margin_cells`; not '
+        "a default yet, see \"Order\"), on the ladder's and the scan's designs against the same references, "
+        "at the grid method's default resolution and at about a third of its nodes; its cost on the paper "
+        "design against the old default, timed alternately as the ladder:\n\n"
+        + margins_table(results)
         + "\n\nWhere the new method's time goes at its default (paper design, CPU time; each phase is its "
         f"share of the fastest of {REPEATS} profiled runs times the unprofiled evaluation; the fine pass "
         "is the grid's nodes, the boundary the crossings and the cut cells; the last two columns in "
