@@ -95,7 +95,7 @@ def evaluation_table() -> list[list[str]]:
         accuracy = [f"{100 * (ev.volume / fine.volume - 1):+.3f} %", f"{100 * (ev.gdi / fine.gdi - 1):+.3f} %"]
         if mech.section_axis is not None:
             # exact sections (planar mechanisms): compiled only, no grid nodes to loop over
-            nodes = f"{ev.n_samples:,} 1/kappa samples"
+            nodes = f"{ev.n_samples:,} points of the rows' rule"
             rows.append(
                 [name, str(res), nodes, f"{1e3 * fast:.2f}", *["exact sections: compiled only"] * 4, *accuracy, ""]
             )

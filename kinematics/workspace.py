@@ -82,7 +82,26 @@ ERROR_RESOLUTION = 0.5
 
 @dataclass(frozen=True)
 class Evaluation:
-    """Workspace volume and dexterity of one design (see module docstring for units)."""
+    """Workspace volume and dexterity of one design (see module docstring for units).
+
+    The two counters say how the integration rule sampled the pose space; V and the GDI do not
+    depend on them. ``n_inside / n_samples`` is the share of the rule's points inside the
+    dexterous workspace (``1/kappa > min_inverse_condition``), i.e. the filled share of the region
+    the rule samples, which is not the pose box everywhere:
+
+    ``n_samples`` : int
+        Sample points of the rule (dimensionless count). ``grid``, ``midpoint``, ``margins``:
+        the grid's nodes (over the box the grid spans; with an axis integrated exactly, H4's z,
+        over the other axes). Exact sections (``grid`` for the 2-RPR and 3-RPR): one point per
+        node spacing along each row, times the rows (2-RPR: rows over the pose box; 3-RPR: each
+        layer's rows over its reachable y extent). ``polar``: the membership tests and ``1/kappa``
+        evaluations of the ray search.
+    ``n_inside`` : int
+        Of those, the points inside (dimensionless count). Grid methods: the nodes inside (with
+        an exact axis: nodes whose interval along it is not empty). Exact sections: the rows'
+        dexterous length over the node spacing, rounded. ``polar``: the rays that meet the
+        workspace.
+    """
 
     mechanism: str
     volume: float
@@ -2123,7 +2142,7 @@ def _integrate_sections(mechanism, resolution, orientation, min_ic, length):
     if angle is not None:
         poses[:, angle] = np.repeat(layers, n_y)
     step = (float(hi[section]) - float(lo[section])) / max(nodes[2] * resolution, 1.0)
-    measure, reach, integral, ic_min, ic_max, evaluated = mechanism.exact_sections(
+    measure, reach, integral, ic_min, ic_max, _ = mechanism.exact_sections(
         poses, float(lo[section]), step, min_ic, length
     )
 
@@ -2150,7 +2169,14 @@ def _integrate_sections(mechanism, resolution, orientation, min_ic, length):
         # out of V where the dexterity limit cuts the workspace inside (the default's band), and
         # is at most the sections' own elsewhere; 0 where nothing is dexterous
         volume = float(exact) * dexterous / reachable
-    return volume, stats, int(evaluated), int(inside.sum()), None
+    # the counters as a grid's: the rule's sample points, one per node spacing ``step`` along each
+    # row, and those inside the dexterous workspace (its length on the rows over ``step``), so that
+    # n_inside / n_samples is the dexterous share of what the rows span (the pose box, or the
+    # 3-RPR's reachable extent). Why not the Jacobians evaluated and the rows met: those counted
+    # other things (83858 evaluations, 530 rows for a 2-RPR filling 45 % of its box)
+    n_samples = int(round(poses.shape[0] * (float(hi[section]) - float(lo[section])) / step))
+    n_inside = min(int(round(float(measure.sum()) / step)), n_samples)
+    return volume, stats, n_samples, n_inside, None
 
 
 def _has_sections(mechanism: Mechanism, fixed: dict[str, float]) -> bool:

@@ -16,7 +16,7 @@ from omegaconf import OmegaConf
 from pipeline.config import CONFIG_DIR, Config, register_configs, validate
 from pipeline.errors import ConfigError
 from pipeline.stages.evaluate import evaluate_designs
-from pipeline.stages.optimise import optimise_design
+from pipeline.stages.optimise import optimiser_run
 from pipeline.stages.sample import sample_designs
 from pipeline.store.cache import cached
 from pipeline.store.parquet import read_metadata
@@ -147,14 +147,14 @@ def test_cache_hits_checked_with_joblibs_api(tmp_path):
     run_study(make_cfg(overrides), tmp_path / "a")
     designs = cached(sample_designs, cache)(*designs_args)
     grid = (c.evaluate.resolution, c.evaluate.method)
-    optimise_args = (c.mechanism, *grid, c.evaluate.refine_factor, c.objective, c.optimizer, None)
+    optimise_args = (c.mechanism, *grid, c.objective, c.optimizer, None)
     assert cached(sample_designs, cache).check_call_in_cache(*designs_args)
     assert cached(evaluate_designs, cache).check_call_in_cache(c.mechanism, *grid, designs)
-    assert cached(optimise_design, cache).check_call_in_cache(*optimise_args)
+    assert cached(optimiser_run, cache).check_call_in_cache(*optimise_args)
     # a new w_d reruns only the optimiser; n_jobs is not part of any key
     other = validate(make_cfg([*overrides, "objective.w_d=0.75", "parallel.n_jobs=2"]))
-    assert not cached(optimise_design, cache).check_call_in_cache(
-        other.mechanism, *grid, other.evaluate.refine_factor, other.objective, other.optimizer, None
+    assert not cached(optimiser_run, cache).check_call_in_cache(
+        other.mechanism, *grid, other.objective, other.optimizer, None
     )
     assert cached(evaluate_designs, cache).check_call_in_cache(other.mechanism, *grid, designs, n_jobs=2)
     run_study(make_cfg(overrides), tmp_path / "b")
@@ -197,7 +197,13 @@ def test_a_midpoint_result_is_never_reused_for_a_grid_run(tmp_path):
     run_study(make_cfg(midpoint), tmp_path / "midpoint")
     run_study(make_cfg(grid), tmp_path / "grid")
     stages = json.loads((tmp_path / "grid" / "manifest.json").read_text())["stages"]
-    assert stages == {"sample": "cached", "evaluate": "computed", "reference": "computed", "optimise": "computed"}
+    assert stages == {
+        "sample": "cached",
+        "evaluate": "computed",
+        "reference": "computed",
+        "optimise": "computed",
+        "refine": "computed",
+    }
     by_method = {m: pd.read_parquet(tmp_path / m / "best.parquet").iloc[0] for m in ("grid", "midpoint")}
     assert {m: row["method"] for m, row in by_method.items()} == {"grid": "grid", "midpoint": "midpoint"}
     assert by_method["grid"]["config_hash"] != by_method["midpoint"]["config_hash"]

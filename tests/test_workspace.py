@@ -314,3 +314,30 @@ def test_a_cut_cell_s_integrand_is_continuous_where_two_crossings_are_as_near(ce
     x_nearer, y_nearer = value(0.3, 0.3 + 1e-9), value(0.3 + 1e-9, 0.3)
     assert np.abs(x_nearer - y_nearer).max() < 1e-6
     assert np.abs(value(0.1, 0.3) - value(0.3, 0.1)).max() > 1e-3  # the two crossings do differ
+
+
+@pytest.mark.parametrize("name", ["rpr2", "rpr3"])
+def test_the_counters_of_exact_sections_are_the_rule_s_points_and_those_inside(name):
+    """Under exact sections (2-RPR, 3-RPR) ``n_samples`` counts the rule's sample points (one per
+    node spacing along each row) and ``n_inside`` those in the dexterous workspace, so that their
+    ratio is the filled share of what the rows span, as a grid's is of the box: for the 2-RPR
+    (rows over the pose box) V over the box; for the 3-RPR (each layer's rows over its reachable
+    y extent) the layers' mean of their dexterous area over the extent's rectangle. (They counted
+    the Jacobians evaluated and the rows met: a share of a few per cent.)"""
+    m = get_mechanism(name, **PAPER_DESIGNS[name])
+    ev = evaluate(m, error_estimate=False)
+    assert 0 < ev.n_inside < ev.n_samples
+    share = ev.n_inside / ev.n_samples
+    lo, hi = m.pose_bounds(ev.orientation)
+    if name == "rpr2":
+        expected = ev.volume / float(np.prod(np.subtract(hi, lo)))
+    else:
+        # the default orientations are all reachable (the layers span them); each layer's area at
+        # constant orientation over the rectangle of its y extent times the x range, averaged
+        assert np.isfinite(m.transverse_extent(np.array(ev.orientation))).all()
+        n = 12
+        phis = ev.orientation[0] + (np.arange(n) + 0.5) * (ev.orientation[1] - ev.orientation[0]) / n
+        low, high = m.transverse_extent(phis)
+        areas = [evaluate(m, orientation=(p, p), error_estimate=False).volume for p in phis]
+        expected = float(np.mean(np.array(areas) / ((high - low) * (hi[0] - lo[0]))))
+    assert share == pytest.approx(expected, rel=0.03)

@@ -12,8 +12,8 @@ Steps (each optional part set in the optimiser's config):
 4. ``reference``: the problem's reference optimum, the best of several
    independent searches (:func:`pipeline.optimizers.reference.best_known`),
    computed once per problem by :func:`reference_stage` (a cached stage of its
-   own: every optimiser and seed of a problem shares it), and the run's gap
-   to it is recorded (``reference_value``, ``<name>_reference``,
+   own: every optimiser and seed of a problem shares it; its optimum is re-evaluated
+   with the run's in step 3), and the run's gap to it is recorded (``reference_value``, ``<name>_reference``,
    ``reference_gap``, ``reference_found_by``, ``reference_evaluations``). The
    paper-faithful GA keeps its own result as the run's optimum (it is what
    the paper did) and says how far it stops short. ``n_evaluations`` counts
@@ -27,12 +27,22 @@ is "within error" (``reference_gap_within_error``, ``reference_gap_label``),
 never a precise percentage; a run better than the reference by more than the
 error is labelled as beating it.
 
+Stages and their cache keys (:func:`optimise_design` runs them; :func:`stage_runner` caches
+each in a run): ``optimise`` (:func:`optimiser_run`: steps 1-2 and the probe) and ``reference``
+(:func:`reference_stage`: the searches of step 4) are keyed on the mechanism, resolution,
+integration method and objective (and the optimiser's config and starting designs); only
+``refine`` (:func:`refine_stage`: the re-evaluations of step 3 and of the reference's optimum)
+takes ``refine_factor``. Changing ``refine_factor`` reruns only those few evaluations.
+
 Designs met twice within a run are evaluated once (an in-run memo).
 """
 
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 
 import numpy as np
 import pandas as pd
@@ -67,6 +77,28 @@ class _MemoEvaluator:
         return np.array([self.memo[k] for k in keys])
 
 
+#: how :func:`optimise_design` runs its cached parts: ``runner(name, func, *args, **kwargs)``, set by
+#: :func:`stage_runner` (the run's chain caches each and records it in the manifest); unset, each
+#: part is a plain call (a direct call of :func:`optimise_design`, e.g. from a test or a notebook)
+_RUNNER: ContextVar[Callable | None] = ContextVar("stage_runner", default=None)
+
+
+@contextmanager
+def stage_runner(runner: Callable) -> Iterator[None]:
+    """Run the parts of :func:`optimise_design` (``optimise``, ``reference``, ``refine``) through
+    ``runner(name, func, *args, **kwargs)`` within the block (the run's cached stages)."""
+    token = _RUNNER.set(runner)
+    try:
+        yield
+    finally:
+        _RUNNER.reset(token)
+
+
+def _run(name: str, func: Callable, *args: object, **kwargs: object) -> object:
+    runner = _RUNNER.get()
+    return func(*args, **kwargs) if runner is None else runner(name, func, *args, **kwargs)
+
+
 def optimise_design(
     mechanism: MechanismConfig,
     resolution: int | None,
@@ -78,7 +110,12 @@ def optimise_design(
     reference: dict | None = None,
     n_jobs: int = 1,
 ) -> dict:
-    """Run the optimisation of one study.
+    """Run the optimisation of one study: :func:`optimiser_run`, :func:`reference_stage` and
+    :func:`refine_stage`, put together by :func:`optimum_result`.
+
+    Each part is a cached stage of its own in a run (:func:`stage_runner`), keyed on what it
+    depends on: ``refine_factor`` reaches only :func:`refine_stage`, so a run that changes it
+    alone reads the optimiser's run and the reference from the cache.
 
     Parameters
     ----------
@@ -90,19 +127,58 @@ def optimise_design(
         Workspace integration method (``evaluate.method``: grid or midpoint), of the
         fitness and of the refined evaluation alike.
     refine_factor : int
-        The optimum is re-evaluated at this multiple of the resolution.
+        The optimum (and the reference) is re-evaluated at this multiple of the resolution.
     initial : ndarray (k, n_design), optional
         Starting designs (the best sampled ones), used where the optimiser takes them.
     reference : dict, optional
-        The problem's :func:`reference_stage` (computed here when
-        ``optimizer.reference`` is set and none is given).
+        The problem's :func:`reference_stage` (computed here when ``optimizer.reference`` is
+        set and none is given). One that carries its ``error`` already (objective unit) is
+        taken as it is; otherwise its optimum is re-evaluated with the run's.
 
     Returns
     -------
     dict
         ``history`` (DataFrame per generation, wall time removed), ``wall_time``
-        (list of s), ``best`` (dict of scalars: see :func:`_best_row`) and
+        (list of s), ``best`` (dict of scalars: see :func:`optimum_result`) and
         ``front`` (DataFrame of a Pareto optimiser's non-dominated designs, or None).
+    """
+    run = _run("optimise", optimiser_run, mechanism, resolution, method, objective, optimizer, initial, n_jobs=n_jobs)
+    if optimizer.reference and reference is None:
+        reference = _run("reference", reference_stage, mechanism, resolution, method, objective, n_jobs=n_jobs)
+    if not optimizer.reference:
+        reference = None
+    reference_x = None if reference is None or "error" in reference else np.asarray(reference["x"], dtype=float)
+    refined = _run("refine", refine_stage, mechanism, resolution, method, refine_factor, run["x"], reference_x)
+    return optimum_result(mechanism, resolution, method, objective, run, reference, refined)
+
+
+def optimiser_run(
+    mechanism: MechanismConfig,
+    resolution: int | None,
+    method: str,
+    objective: ObjectiveConfig,
+    optimizer: OptimizerConfig,
+    initial: np.ndarray | None = None,
+    n_jobs: int = 1,
+) -> dict:
+    """The optimiser, its polish and the flat-variable probe at the run's resolution (the
+    ``optimise`` stage; independent of ``refine_factor`` and of the reference).
+
+    Parameters
+    ----------
+    mechanism, objective, optimizer, resolution, method, initial
+        As :func:`optimise_design`.
+
+    Returns
+    -------
+    dict
+        ``x`` (ndarray (n_design,), design units: the run's optimum), ``value`` (its objective,
+        objective unit), ``optimizer_value`` (the optimiser's own, before the polish),
+        ``found_by``, ``polish_improvement``, ``n_evaluations`` (the run's own),
+        ``evaluation`` (ndarray (1, len(EVALUATION_FIELDS)): the optimum's evaluation at the
+        run's resolution), ``flat`` (:func:`~pipeline.optimizers.sensitivity.flat_intervals`),
+        ``history`` (DataFrame per generation, wall time removed), ``wall_time`` (list of s),
+        ``front`` (DataFrame or None).
     """
     names = list(mechanism.design.names)
     lower, upper = np.asarray(mechanism.design.lower), np.asarray(mechanism.design.upper)
@@ -147,40 +223,33 @@ def optimise_design(
         polish_improvement = polished.improvement
         if polished.fun > value:
             x, value, found_by = polished.x, polished.fun, "polish"
-    if optimizer.reference and reference is None:
-        reference = reference_stage(mechanism, resolution, method, refine_factor, objective, n_jobs)
-    if not optimizer.reference:
-        reference = None
     history = result.history.rename(columns={f"x{j}": n for j, n in enumerate(names)})
     wall_time = history.pop("wall_time").tolist()
     # a multi-objective run evaluates outside the scalar problem: count those too
     multi_objective_evaluations = result.n_evaluations if algorithm.n_objectives > 1 else 0
-    best = _best_row(mechanism, resolution, method, refine_factor, objective, x, value, rows)
-    best.update(
-        optimizer_value=optimizer_value,
-        found_by=found_by,
-        polish_improvement=polish_improvement,
-        n_evaluations=int(scalar.n_evaluations + multi_objective_evaluations),
-    )
-    best.update(reference_columns(best, reference, names))
-    if reference is not None:
-        log.info(
-            "optimise: reference %.6g (%s); %s %.6g, %s",
-            reference["value"],
-            reference["found_by"],
-            optimizer.name,
-            value,
-            best["reference_gap_label"],
-        )
-    best.update(flat_intervals(scalar, x, value, names))
-    return {"history": history, "best": best, "front": front, "wall_time": wall_time}
+    # counted before the probe below, whose evaluations are not the run's search
+    n_evaluations = int(scalar.n_evaluations + multi_objective_evaluations)
+    evaluation = rows(x[None, :])
+    return {
+        "optimizer": optimizer.name,
+        "x": x,
+        "value": value,
+        "optimizer_value": optimizer_value,
+        "found_by": found_by,
+        "polish_improvement": polish_improvement,
+        "n_evaluations": n_evaluations,
+        "evaluation": evaluation,
+        "flat": flat_intervals(scalar, x, value, names),
+        "history": history,
+        "wall_time": wall_time,
+        "front": front,
+    }
 
 
 def reference_stage(
     mechanism: MechanismConfig,
     resolution: int | None,
     method: str,
-    refine_factor: int,
     objective: ObjectiveConfig,
     n_jobs: int = 1,
 ) -> dict:
@@ -188,16 +257,15 @@ def reference_stage(
 
     :func:`~pipeline.optimizers.reference.best_known` (several CMA-ES seeds, DE,
     a dense grid where the dimension allows, each polished) on the run's
-    objective at the run's resolution and integration method; its optimum is re-evaluated at
-    ``refine_factor`` times the resolution for the error estimate.
+    objective at the run's resolution and integration method. Its re-evaluation at
+    ``refine_factor`` times the resolution (the error estimate) is :func:`refine_stage`'s, so
+    that changing ``refine_factor`` never repeats the searches.
 
     Returns
     -------
     dict
         ``value`` (objective unit), ``x`` (list, design units), ``found_by``
-        (the best search and how many searches agree), ``n_evaluations``,
-        ``value_refined`` (objective at the refined resolution), ``error``
-        (``|value_refined - value|``, objective unit).
+        (the best search and how many searches agree), ``n_evaluations``.
     """
     rows = _MemoEvaluator(DesignEvaluator(mechanism, resolution, n_jobs, method))
     problem = Problem(
@@ -206,7 +274,6 @@ def reference_stage(
         np.asarray(mechanism.design.upper),
     )
     found = best_known(problem)
-    refined = _refined_value(mechanism, resolution, method, refine_factor, objective, found.x)
     log.info(
         "reference: %.6g%s by %s, %d evaluations",
         found.fun,
@@ -219,9 +286,84 @@ def reference_stage(
         "x": [float(v) for v in found.x],
         "found_by": found.summary(),
         "n_evaluations": int(found.n_evaluations),
-        "value_refined": refined,
-        "error": abs(refined - float(found.fun)),
     }
+
+
+def refine_stage(
+    mechanism: MechanismConfig,
+    resolution: int | None,
+    method: str,
+    refine_factor: int,
+    x: np.ndarray,
+    reference_x: np.ndarray | None = None,
+) -> dict:
+    """The run's optimum ``x`` (and the reference's, ``reference_x``) re-evaluated at
+    ``refine_factor`` times the resolution, with the run's integration ``method`` (the ``refine``
+    stage: the one part of a run that depends on ``refine_factor``).
+
+    Each design's resolution is ``resolution`` or, where None, the mechanism's default for that
+    design and method.
+
+    Returns
+    -------
+    dict
+        ``evaluation`` (ndarray (1, len(EVALUATION_FIELDS)) of ``x``), ``reference_evaluation``
+        (the same of ``reference_x``, or None).
+    """
+
+    def refined(design: np.ndarray) -> np.ndarray:
+        res = resolution or default_resolution(mechanism.build(design), mechanism.orientation_rad(), None, method)
+        return DesignEvaluator(mechanism, res * refine_factor, 1, method).evaluate(np.asarray(design)[None, :])
+
+    return {
+        "evaluation": refined(x),
+        "reference_evaluation": None if reference_x is None else refined(reference_x),
+    }
+
+
+def optimum_result(
+    mechanism: MechanismConfig,
+    resolution: int | None,
+    method: str,
+    objective: ObjectiveConfig,
+    run: dict,
+    reference: dict | None,
+    refined: dict,
+) -> dict:
+    """The run's result from its stages: :func:`optimiser_run`'s ``run``, the ``reference``
+    (:func:`reference_stage`, or None) and :func:`refine_stage`'s ``refined``.
+
+    Returns
+    -------
+    dict
+        ``history``, ``wall_time``, ``front`` (as :func:`optimiser_run`) and ``best``: design,
+        mechanism parameters, evaluation at the run's and at the refined resolution, the
+        optimiser's columns, the reference columns (:func:`reference_columns`) and the flat
+        intervals.
+    """
+    names = list(mechanism.design.names)
+    best = _best_row(mechanism, resolution, method, objective, run["x"], run["value"], run["evaluation"], refined)
+    best.update(
+        optimizer_value=run["optimizer_value"],
+        found_by=run["found_by"],
+        polish_improvement=run["polish_improvement"],
+        n_evaluations=run["n_evaluations"],
+    )
+    if reference is not None and "error" not in reference:
+        value_refined = float(objective_values(objective.name, refined["reference_evaluation"], objective.w_d)[0])
+        reference = {**reference, "value_refined": value_refined, "error": abs(value_refined - reference["value"])}
+    best.update(reference_columns(best, reference, names))
+    if reference is not None:
+        log.info(
+            "optimise: reference %.6g (%s); %s %.6g, %s",
+            reference["value"],
+            reference["found_by"],
+            run["optimizer"],
+            run["value"],
+            best["reference_gap_label"],
+        )
+    best.update(run["flat"])
+    return {"history": run["history"], "best": best, "front": run["front"], "wall_time": run["wall_time"]}
 
 
 def objective_unit(mechanism: MechanismConfig, objective: str) -> str:
@@ -318,32 +460,19 @@ def reference_columns(best: dict, reference: dict | None, names: list[str]) -> d
     return out
 
 
-def _refined_value(
-    mechanism: MechanismConfig,
-    resolution: int | None,
-    method: str,
-    refine_factor: int,
-    objective: ObjectiveConfig,
-    x: np.ndarray,
-) -> float:
-    """Objective of design ``x`` at ``refine_factor`` times the resolution (one evaluation, same method)."""
-    res = resolution or default_resolution(mechanism.build(x), mechanism.orientation_rad(), None, method)
-    refined_rows = DesignEvaluator(mechanism, res * refine_factor, 1, method).evaluate(np.asarray(x)[None, :])
-    return float(objective_values(objective.name, refined_rows, objective.w_d)[0])
-
-
 def _best_row(
     mechanism: MechanismConfig,
     resolution: int | None,
     method: str,
-    refine_factor: int,
     objective: ObjectiveConfig,
     x: np.ndarray,
     value: float,
-    rows: _MemoEvaluator,
+    evaluation: np.ndarray,
+    refined: dict,
 ) -> dict:
-    """Design, mechanism parameters, evaluation at the run's and at the refined resolution
-    (both with the run's integration ``method``, recorded beside the resolution)."""
+    """Design, mechanism parameters, evaluation at the run's (``evaluation``) and at the refined
+    resolution (``refined``: :func:`refine_stage`), both with the run's integration ``method``,
+    recorded beside the resolution."""
     names = list(mechanism.design.names)
     best: dict = {name: float(v) for name, v in zip(names, x)}
     lower, upper = mechanism.design.lower, mechanism.design.upper
@@ -355,16 +484,16 @@ def _best_row(
         # a design variable's own column already holds it (Tricept a, b, d; 2-RPR b, q_min)
         if isinstance(v, (int, float, str)) and not isinstance(v, bool) and key not in names:
             best[param_column(key, mech.param_unit(key, v))] = v
-    base = evaluation_frame(rows(x[None, :])).iloc[0]
+    base = evaluation_frame(evaluation).iloc[0]
     res = resolution or default_resolution(mech, mechanism.orientation_rad(), None, method)
-    refined_rows = DesignEvaluator(mechanism, res * refine_factor, 1, method).evaluate(x[None, :])
-    refined = evaluation_frame(refined_rows).iloc[0]
+    refined_rows = refined["evaluation"]
+    refined_frame = evaluation_frame(refined_rows).iloc[0]
     for field in EVALUATION_FIELDS:
         if field != "valid":
             best[field] = base[field].item()
     best["objective_value"] = float(value)
-    best["volume_refined"] = float(refined["volume"])
-    best["gdi_refined"] = float(refined["gdi"])
+    best["volume_refined"] = float(refined_frame["volume"])
+    best["gdi_refined"] = float(refined_frame["gdi"])
     best["objective_value_refined"] = float(objective_values(objective.name, refined_rows, objective.w_d)[0])
     best["objective_error"] = abs(best["objective_value_refined"] - best["objective_value"])
     best["resolution"] = int(res)

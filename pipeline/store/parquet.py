@@ -86,8 +86,16 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "inverse_condition_max": ("1", "largest 1/κ in the workspace"),
     "suri": ("1", "space utility ratio V/V*"),
     "reference_volume": ("volume_unit", "robot size V* of SURI"),
-    "n_samples": ("", "grid nodes evaluated"),
-    "n_inside": ("", "grid nodes inside the workspace"),
+    "n_samples": (
+        "",
+        "sample points of the integration rule: the grid's nodes; exact sections (2-RPR, 3-RPR): "
+        "one per node spacing along each row (kinematics.workspace.Evaluation)",
+    ),
+    "n_inside": (
+        "",
+        "of those, the points inside the dexterous workspace: n_inside / n_samples is the filled "
+        "share of the region the rule samples (the grid's box; the 2-RPR's pose box; the 3-RPR's y extents)",
+    ),
     "valid": ("", "the design could be built (false: infeasible parameters, all zeros)"),
     "objective_value": ("objective_unit", "value of the run's objective (eta when objective = mixed)"),
     "objective_unit": ("", "unit of objective_value: volume_unit for volume, 1 otherwise"),

@@ -24,7 +24,7 @@ from pipeline.errors import RunError
 from pipeline.evaluation.scale import workers_for
 from pipeline.objectives import EVALUATION_FIELDS, objective_values
 from pipeline.stages.evaluate import evaluate_designs
-from pipeline.stages.optimise import optimise_design, reference_stage
+from pipeline.stages.optimise import optimise_design, reference_stage, stage_runner
 from pipeline.stages.plot import run_figures
 from pipeline.stages.sample import sample_designs
 from pipeline.store.cache import cached
@@ -93,36 +93,24 @@ def compute(c: Config, run_dir: Path, timings: dict, stages: dict) -> dict[str, 
         t0 = time.perf_counter()
         # the reference optimum is a stage of its own: one per problem, shared by every optimiser and seed
         reference = (
-            _stage(
-                stages,
-                "reference",
-                reference_stage,
-                cache_dir,
+            _stage(stages, "reference", reference_stage, cache_dir, mech, resolution, method, objective, n_jobs=n_jobs)
+            if optimizer.reference
+            else None
+        )
+        # the optimiser's run (stage "optimise") and the refined re-evaluations (stage "refine"),
+        # each cached on its own: refine_factor is in the second's key only
+        with stage_runner(lambda name, func, *args, **kwargs: _stage(stages, name, func, cache_dir, *args, **kwargs)):
+            optimum = optimise_design(
                 mech,
                 resolution,
                 method,
                 c.evaluate.refine_factor,
                 objective,
+                optimizer,
+                initial,
+                reference=reference,
                 n_jobs=n_jobs,
             )
-            if optimizer.reference
-            else None
-        )
-        optimum = _stage(
-            stages,
-            "optimise",
-            optimise_design,
-            cache_dir,
-            mech,
-            resolution,
-            method,
-            c.evaluate.refine_factor,
-            objective,
-            optimizer,
-            initial,
-            reference=reference,
-            n_jobs=n_jobs,
-        )
         timings["optimise"] = time.perf_counter() - t0
 
     _check_result(evaluated, scores, optimum["best"])
