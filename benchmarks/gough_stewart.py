@@ -1,17 +1,20 @@
-"""Figures of docs/gough_stewart.md: workspaces, cross-checks, length sensitivity, dense reference.
+"""Figures of docs/gough_stewart.md: workspaces, cross-checks, length sensitivity, the experiment.
 
-Run: ``python -m benchmarks.gough_stewart [--dense]``. Prints
+Run: ``python -m benchmarks.gough_stewart --dense --markdown docs/gough_stewart_measured.md``
+(without ``--markdown`` the page is printed; without ``--dense`` its experiment section is left
+out). The page holds, for the docs design:
 
-1. time per evaluation at the default resolution (constant-orientation workspace, 32^3 nodes)
-   and V, GDI against 2x and 4x finer grids;
-2. the constant-orientation volume against an independent brute-force Monte-Carlo
+1. the default evaluation (time, V, GDI, SURI) and V, GDI against 2x and 4x finer grids;
+2. the orientation workspace at the home position, and the 6-D volume by randomised QMC with its
+   95 % interval (tilt and torsion within +-15 deg) against a 6-D grid;
+3. the constant-orientation volume against an independent brute-force Monte Carlo
    (``tests/test_gough_stewart.py::brute_force_volume``, 4 seeds x 4e5 points);
-3. Fichter's singularity: 1/kappa at torsion 85, 90, 95 deg at the home position;
-4. the orientation workspace at the home position, and the 6-D volume by randomised QMC
-   with its 95 % interval (tilt and torsion within +-15 deg);
-5. GDI against the characteristic length L (the docs design, and the experiment's optimum);
-6. with ``--dense``: the mixed index (w_d = 0.5) on a dense grid of the design box (the
-   experiment's reference, 2,304 evaluations, a few minutes on 2 cores).
+4. Fichter's singularity: 1/kappa at torsion 85-95 deg at the home position;
+5. with ``--dense``: ``python -m pipeline +experiment=gough_stewart_mixed`` run as a user runs it
+   (a temporary folder, default paths; its best.parquet read back), against the mixed index
+   (w_d = 0.5) on a dense grid of the design box (2,304 evaluations, a few minutes on 2 cores)
+   and a Nelder-Mead polish of the grid's best;
+6. GDI against the characteristic length L (the docs design, and the experiment's optimum).
 """
 
 from __future__ import annotations
@@ -19,15 +22,22 @@ from __future__ import annotations
 import argparse
 import itertools
 import math
+import os
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 from benchmarks.evaluate import best_time
 from kinematics import MECHANISMS, get_mechanism
 from kinematics.gough_stewart import constant_orientation_workspace, orientation_workspace, workspace_6d
 from kinematics.workspace import evaluate
 
+ROOT = Path(__file__).resolve().parent.parent
 DESIGN = dict(r_base=400.0, r_platform=250.0, sep_base=30.0, sep_platform=30.0, height=700.0)
 
 
@@ -51,85 +61,207 @@ def dense_reference(w_d: float = 0.5, n_jobs: int = 2) -> tuple[np.ndarray, floa
     return designs[k], float(values[k]), len(designs)
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--dense", action="store_true", help="also run the dense reference of the experiment")
-    parser.add_argument(
-        "--optimum",
-        type=float,
-        nargs=4,
-        default=None,
-        help="a design (r_platform, sep_base, sep_platform, height) for the L table",
+def run_experiment(folder: Path) -> pd.Series:
+    """``python -m pipeline +experiment=gough_stewart_mixed`` as a user runs it (in ``folder``,
+    default paths), its ``best.parquet`` read back: the optimum's row."""
+    subprocess.run(
+        [sys.executable, "-m", "pipeline", "+experiment=gough_stewart_mixed"],
+        cwd=folder,
+        check=True,
+        capture_output=True,
+        env=dict(os.environ, PYTHONPATH=str(ROOT)),
     )
-    args = parser.parse_args()
-    mech = get_mechanism("gough_stewart", **DESIGN)
+    (best,) = sorted(folder.glob("outputs/**/best.parquet"))
+    return pd.read_parquet(best).iloc[0]
 
+
+def polish(start: np.ndarray, w_d: float = 0.5) -> tuple[np.ndarray, float, int]:
+    """Nelder-Mead from ``start`` over (r_platform, height) with both separations at their lower
+    bound, where the dense grid's best lies (scipy; bounds by clipping): design, eta, evaluations."""
+    from scipy.optimize import minimize
+
+    cls = MECHANISMS["gough_stewart"]
+    lo = np.array([v.lower for v in cls.design_variables])
+    hi = np.array([v.upper for v in cls.design_variables])
+    count = 0
+
+    def design(x: np.ndarray) -> np.ndarray:
+        return np.clip([x[0], lo[1], lo[2], x[1]], lo, hi)
+
+    def negative(x: np.ndarray) -> float:
+        nonlocal count
+        count += 1
+        return -evaluate(cls.from_design(design(x), **cls.default_fixed), error_estimate=False).mixed(w_d)
+
+    result = minimize(negative, [start[0], start[3]], method="Nelder-Mead", options=dict(xatol=0.1, fatol=1e-7))
+    return design(result.x), -float(result.fun), count
+
+
+def measured_page(args: argparse.Namespace) -> str:
+    """The figures of docs/gough_stewart.md as a Markdown page (what ``--markdown`` writes)."""
+    mech = get_mechanism("gough_stewart", **DESIGN)
     ev = evaluate(mech, error_estimate=False)
     seconds = best_time(lambda: evaluate(mech, error_estimate=False), 5)
-    print(
-        f"1. default evaluation: resolution {ev.resolution}, {ev.n_samples} nodes, {1e3 * seconds:.0f} ms; "
-        f"V = {ev.volume:.5g} {ev.volume_unit}, GDI = {ev.gdi:.4f}, SURI = {ev.suri:.4f}"
+    fine = {factor: evaluate(mech, resolution=factor * ev.resolution, error_estimate=False) for factor in (2, 4)}
+    lines = [
+        "<!-- generated by python -m benchmarks.gough_stewart --dense --markdown docs/gough_stewart_measured.md -->",
+        "",
+        "# Gough-Stewart platform: measured figures",
+        "",
+        f"Generated by `python -m benchmarks.gough_stewart --dense --markdown docs/gough_stewart_measured.md` on "
+        f"{time.strftime('%Y-%m-%d')} ({os.cpu_count()}-core machine, shared: times are upper bounds). "
+        "The model, the measures and what these figures check are in [gough_stewart.md](gough_stewart.md).",
+        "",
+        "## The docs design",
+        "",
+        ", ".join(f"{k} = {v:g}" for k, v in DESIGN.items()) + " (mm, degrees; legs 600-900 mm, cones 45°).",
+        "",
+        "| quantity | value |",
+        "| --- | --- |",
+        f"| default evaluation | resolution {ev.resolution} ({ev.n_samples} nodes), {1e3 * seconds:.0f} ms |",
+        f"| V, GDI, SURI (default) | {ev.volume:.5g} {ev.volume_unit}, {ev.gdi:.4f}, {ev.suri:.4f} |",
+        "| V, GDI vs 2x / 4x finer grid | "
+        + " / ".join(f"{100 * (ev.volume / fine[f].volume - 1):+.3f} %" for f in (2, 4))
+        + ", "
+        + " / ".join(f"{100 * (ev.gdi / fine[f].gdi - 1):+.3f} %" for f in (2, 4))
+        + " |",
+    ]
+    ow = orientation_workspace(
+        mech, (0.0, 0.0, 700.0), (-math.pi / 2, math.pi / 2), resolution=32, error_estimate=False
     )
-    for factor in (2, 4):
-        fine = evaluate(mech, resolution=factor * ev.resolution, error_estimate=False)
-        print(
-            f"   vs {factor}x finer: V {100 * (ev.volume / fine.volume - 1):+.2f} %, "
-            f"GDI {100 * (ev.gdi / fine.gdi - 1):+.2f} %"
-        )
+    lines.append(
+        f"| orientation workspace at (0, 0, 700 mm), box ±90° | {ow.volume:.4g} rad³ "
+        f"({100 * ow.suri:.2f} % of the box), GDI {ow.gdi:.4f} |"
+    )
+    t0 = time.perf_counter()
+    qmc = workspace_6d(mech, (-math.radians(15), math.radians(15)), n_points=2**15, replicates=8, seed=0)
+    lines.append(
+        f"| 6-D, angles in ±15°, {qmc.replicates} x {qmc.n_points} points | V = {qmc.volume:.4g} {qmc.unit}, "
+        f"95 % CI [{qmc.volume_ci[0]:.4g}, {qmc.volume_ci[1]:.4g}]; GDI {qmc.gdi:.4f} "
+        f"[{qmc.gdi_ci[0]:.4f}, {qmc.gdi_ci[1]:.4f}]; {time.perf_counter() - t0:.1f} s |"
+    )
+    grid6 = evaluate(mech, orientation=(-math.radians(15), math.radians(15)), resolution=10, error_estimate=False)
+    lines.append(f"| 6-D grid, 10 nodes per axis | V = {grid6.volume:.4g} {qmc.unit}, GDI {grid6.gdi:.4f} |")
 
     from tests.test_gough_stewart import brute_force_volume
 
+    lines += [
+        "",
+        "## Independent brute force",
+        "",
+        "`tests/test_gough_stewart.py::brute_force_volume` (its own joints, scipy's rotations, plain Monte "
+        "Carlo over a large box), four seeds of 4·10⁵ points, against the grid at 96³ (no dexterity limit):",
+        "",
+        "| orientation (tilt_x, tilt_y, torsion) [rad] | grid 96³ [mm³] | brute force [mm³] (± 1 s.e.) | difference |",
+        "| --- | --- | --- | --- |",
+    ]
     for angles in ((0.0, 0.0, 0.0), (0.15, -0.1, 0.3)):
         grid = constant_orientation_workspace(
             mech, *angles, resolution=96, min_inverse_condition=0.0, error_estimate=False
         ).volume
         brute = np.array([brute_force_volume(mech, *angles, n=400_000, seed=s) for s in range(1, 5)])
         err = brute.std(ddof=1) / math.sqrt(len(brute))
-        print(
-            f"2. constant orientation {angles} rad: grid (96^3) {grid:.5g} mm³, brute force "
-            f"{brute.mean():.5g} ± {err:.2g} mm³ (1 s.e.), difference {100 * (grid / brute.mean() - 1):+.2f} %"
+        lines.append(
+            f"| {angles} | {grid:.5g} | {brute.mean():.5g} ± {err:.2g} | "
+            f"{100 * (grid / brute.mean() - 1):+.2f} % ({abs(grid - brute.mean()) / err:.1f} s.e.) |"
         )
-
+    lines += ["", "## Fichter's singularity (docs design, z = 700 mm)", "", "| torsion [°] | 1/κ |", "| --- | --- |"]
     for torsion in (85.0, 89.0, 90.0, 91.0, 95.0):
         ic = mech.inverse_condition([[0.0, 0.0, 700.0, 0.0, 0.0, math.radians(torsion)]])[0]
-        print(f"3. torsion {torsion:5.1f} deg at (0, 0, 700 mm): 1/kappa = {ic:.3g}")
+        lines.append(f"| {torsion:g} | {ic:.3g} |")
 
-    ow = orientation_workspace(
-        mech, (0.0, 0.0, 700.0), (-math.pi / 2, math.pi / 2), resolution=32, error_estimate=False
-    )
-    print(
-        f"4. orientation workspace at (0, 0, 700 mm), box ±90°: {ow.volume:.4g} rad³ "
-        f"({100 * ow.suri:.2f} % of the box), GDI {ow.gdi:.4f}"
-    )
-    t0 = time.perf_counter()
-    qmc = workspace_6d(mech, (-math.radians(15), math.radians(15)), n_points=2**15, replicates=8, seed=0)
-    print(
-        f"   6-D, tilt_x, tilt_y, torsion in ±15°: V = {qmc.volume:.5g} {qmc.unit}, 95 % CI "
-        f"[{qmc.volume_ci[0]:.5g}, {qmc.volume_ci[1]:.5g}], GDI {qmc.gdi:.4f} [{qmc.gdi_ci[0]:.4f}, "
-        f"{qmc.gdi_ci[1]:.4f}], box {qmc.box_volume:.4g} mm³·rad³, fraction {qmc.fraction:.4f}, "
-        f"{qmc.replicates} x {qmc.n_points} points, {time.perf_counter() - t0:.1f} s"
-    )
-    grid6 = evaluate(mech, orientation=(-math.radians(15), math.radians(15)), resolution=10, error_estimate=False)
-    print(f"   6-D grid 10^6 nodes: V = {grid6.volume:.5g}, GDI {grid6.gdi:.4f}")
-
-    designs = {"docs design": mech}
-    if args.optimum is not None:
-        cls = MECHANISMS["gough_stewart"]
-        designs["optimum"] = cls.from_design(np.array(args.optimum), **cls.default_fixed)
-    for label, m in designs.items():
-        for length in (0.5 * m.r_platform, m.r_platform, 0.5 * (m.r_platform + m.r_base), m.r_base, 2 * m.r_platform):
-            e = evaluate(m, length=length, error_estimate=False)
-            print(
-                f"5. {label}: L = {length:.1f} mm: GDI {e.gdi:.4f}, V {e.volume:.5g} mm³, eta(0.5) {e.mixed(0.5):.5f}"
-            )
-
+    cls = MECHANISMS["gough_stewart"]
+    optimum = None
     if args.dense:
+        with tempfile.TemporaryDirectory() as tmp:
+            t0 = time.perf_counter()
+            run = run_experiment(Path(tmp))
+            run_seconds = time.perf_counter() - t0
+        names = [v.name for v in cls.design_variables]
+        found = np.array([float(run[n]) for n in names])
+        optimum = cls.from_design(found, **cls.default_fixed)
         t0 = time.perf_counter()
-        design, value, count = dense_reference()
-        print(
-            f"6. dense reference (w_d 0.5): {count} designs, best eta {value:.6f} at {design}, "
-            f"{time.perf_counter() - t0:.0f} s"
-        )
+        dense, dense_value, count = dense_reference()
+        dense_seconds = time.perf_counter() - t0
+        polished, polished_value, polish_count = polish(dense)
+        rows = [
+            (
+                f"`python -m pipeline +experiment=gough_stewart_mixed` (seed 0, {int(run['n_evaluations'])} "
+                f"evaluations, {run_seconds:.0f} s)",
+                found,
+                float(run["objective_value"]),
+            ),
+            (f"dense grid 8 × 6 × 8 × 6 = {count} designs, ends included ({dense_seconds:.0f} s)", dense, dense_value),
+            (
+                f"Nelder-Mead from the grid's best, separations at 10° ({polish_count} evaluations)",
+                polished,
+                polished_value,
+            ),
+        ]
+        if np.isfinite(float(run["reference_value"])):  # the experiment's optimiser may run no reference search
+            rows.insert(
+                1,
+                (
+                    f"the run's reference ({run['reference_found_by']}, {int(run['reference_evaluations'])} evaluations)",
+                    np.array([float(run[f"{n}_reference"]) for n in names]),
+                    float(run["reference_value"]),
+                ),
+            )
+        best_value = max(value for *_, value in rows)
+        lines += [
+            "",
+            "## Experiment `gough_stewart_mixed` (η, w_d = 0.5)",
+            "",
+            "| search | " + " | ".join(f"{n} [{u}]" for n, u in _design_columns()) + " | η | gap to the best here |",
+            "| --- | " + " | ".join("---" for _ in names) + " | --- | --- |",
+        ]
+        for label, design, value in rows:
+            lines.append(
+                f"| {label} | "
+                + " | ".join(f"{x:.2f}" for x in design)
+                + f" | {value:.6f} | {100 * (1 - value / best_value):.3f} % |"
+            )
+        lines += [
+            "",
+            f"The experiment's optimum: η's error bar (`objective_error`, its change at `evaluate.refine_factor` "
+            f"x the resolution) {float(run['objective_error']):.2g}, η there (`objective_value_refined`) "
+            f"{float(run['objective_value_refined']):.6f}; GDI {float(run['gdi']):.4f}, SURI "
+            f"{float(run['suri']):.4f}, V {float(run['volume']):.4g} {run['volume_unit']}.",
+        ]
+    lines += [
+        "",
+        "## GDI against the characteristic length L",
+        "",
+        "| design | L = r_p/2 | L = r_p (default) | L = (r_p + r_b)/2 | L = r_b | L = 2 r_p |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    for label, m in (("docs design", mech), ("the experiment's optimum", optimum)):
+        if m is None:
+            continue
+        lengths = (0.5 * m.r_platform, m.r_platform, 0.5 * (m.r_platform + m.r_base), m.r_base, 2 * m.r_platform)
+        gdis = [evaluate(m, length=length, error_estimate=False).gdi for length in lengths]
+        lines.append(f"| {label} (r_p = {m.r_platform:.1f} mm) | " + " | ".join(f"{g:.4f}" for g in gdis) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def _design_columns() -> list[tuple[str, str]]:
+    """(name, unit) of the Gough-Stewart's design variables, as the dataset's ``param_`` columns."""
+    return [(v.name, v.unit) for v in MECHANISMS["gough_stewart"].design_variables]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--dense", action="store_true", help="also run the experiment and the dense reference")
+    parser.add_argument("--markdown", type=Path, default=None, help="write the page here (else print it)")
+    args = parser.parse_args()
+    if args.markdown is not None and not args.markdown.parent.is_dir():
+        parser.error(f"--markdown={args.markdown} is invalid: allowed a file in an existing folder")
+    page = measured_page(args)
+    if args.markdown is None:
+        print(page)
+    else:
+        args.markdown.write_text(page)
+        print(f"wrote {args.markdown}")
 
 
 if __name__ == "__main__":

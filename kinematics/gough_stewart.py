@@ -379,7 +379,8 @@ class GoughStewart(Mechanism):
         centre at zero tilt lies at ``0 < z <= q_max``, and within ``q_max + r_platform -
         r_base cos(g/2)`` of the axis (:meth:`pose_bounds`). A robot size set by the
         stroke alone, so that at a fixed stroke SURI ranks designs by V; SURI stays
-        below 0.12 over the default design box (``docs/gough_stewart.md``).
+        well below 1 (about 0.13 at the largest workspaces of the default design box,
+        ``docs/gough_stewart.md``).
         """
         return math.pi * self.q_max**3 * orientation_measure(orientation, 3)
 
