@@ -18,7 +18,9 @@ Units rule (one unit per column, whatever mechanisms a dataset mixes)
   over (x, y, z, θ), Tricept mm·rad², 2-RPR mm²), so no one unit exists:
   ``volume``, ``volume_refined``, ``reference_volume`` are in the row's
   ``volume_unit`` and objective values in ``objective_unit``; compare volumes
-  within one mechanism;
+  of one ``volume_unit`` only (within one mechanism, its unit may change with
+  the settings: the Gough-Stewart's is mm³ at constant orientation, mm³·rad³
+  with ``mechanism.orientation`` set);
 * every other column has one fixed unit (``COLUMNS``), stored in the Arrow
   field metadata (``unit``, ``description``) and, read back with
   :func:`pipeline.store.dataset.read_dataset`, in ``DataFrame.attrs["units"]``.
