@@ -270,18 +270,23 @@ at its centroid from the linear dexterity margin, of a whole cell the node's val
 its second differences; no Monte Carlo), against the 4x reference on the 10 scan designs, max
 |error| V / GDI: at the defaults Delta 0.053 / 0.160 % (the code: 0.185 / 0.068 %), Tricept
 0.030 / 0.013 % (0.120 / 0.029 %), Gough-Stewart 0.043 / 0.060 % (0.048 / 0.019 %); with fewer
-nodes the Tricept at 20 per axis 0.067 / 0.069 % (none of the 10 over 0.1 %; today's rule at 20
-costs 1.29x the old default against 2.76x at its default), the Delta at 21 0.118 / 0.228 % (5
-over), the Gough-Stewart at 22 0.110 / 0.152 % (1 over, scan 5). The secants matter: without
+nodes the Tricept at 20 per axis 0.067 / 0.069 % (none of the 10 over 0.1 %; the grid rule at 20
+costs about half its default), the Delta at 21 0.118 / 0.228 % (5 over), the Gough-Stewart at 22
+0.110 / 0.152 % (1 over, scan 5). The secants matter: without
 them (margins at the nodes alone, no looks between the nodes) V errs by up to 0.34 % (Delta),
 0.06 % (Tricept), 0.09 % (Gough-Stewart) at the defaults. The GDI's weak part is the boundary
 cells' 1/kappa: with every boundary part's 1/kappa and membership exact (Monte Carlo) and the
 second differences inside, the Delta's GDI errs by +0.007 % on scan 5 at 18 per axis, with the
 centroid's 1/kappa by +0.46 % (1/kappa falls like a root towards a singular boundary, and the
 square of the linear model overshoots there; a look at the centroid does no better, +0.42 %).
-Not yet built into `evaluate`: it needs the margins of the nodes near the boundary (compiled),
-the H4's exact axis, a better 1/kappa of a boundary part, its continuity checked where a crossing
-changes margin or a node enters the boundary band, and a regeneration.
+It is built as `evaluate(method="margins")` (opt-in; `kinematics/margin_cells.py`; the table
+"The opt-in rule" below measures it, cost included), with no step along any of the Tricept's
+design variables through its optimum at 20 per axis (b included, where the grid method steps).
+Not yet a default: at 20 per axis the Tricept costs about as much as today's default (its
+boundary work, the grid method's three looks per cut edge plus the margins near the boundary,
+outweighs the nodes saved), the Delta's GDI misses, the H4's exact axis is not supported, and a
+default changed needs a regeneration. Next: looks at the crossings that compute the margins only
+(the dexterity where its margin binds), and the boundary cells' 1/kappa integrated over the part.
 The
 planar mechanisms' sections converge like h^1.5 across (y, phi) (where a section shrinks to
 nothing, its length falls like a square root), irregularly (the 2-RPR's reachable sections
