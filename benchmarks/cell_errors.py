@@ -47,7 +47,6 @@ from benchmarks.accuracy import METHODS, REFERENCE_FACTOR, SCAN, SCAN_SEED, desi
 from kinematics import MECHANISMS, kernels, margin_cells
 from kinematics import workspace as ws
 from kinematics.polytope import clipped_cell
-from kinematics.workspace import _grid_poses
 
 #: cells per call of the membership test
 BATCH = 500
@@ -57,18 +56,18 @@ def _captured_cut_cells(mech, resolution: int | None = None) -> dict:
     """Run ``evaluate(mech)`` on the numpy path and keep what its cut cells were made of: the
     grid (``values``, ``axes``, ``box``, ``sampled``, ``inside``), the crossings per axis
     (:func:`kinematics.workspace._edge_crossings`) and the cut cells' node-side fractions
-    (:func:`kinematics.workspace._faded_cube_fraction`), the cell widths, and V in cells (the
-    corrected sums), by wrapping those functions."""
+    (:func:`kinematics.workspace._faded_cube_fraction`), the cell widths, the nodes' 1/kappa
+    (``ic``) and V in cells (the corrected sums), by wrapping those functions."""
     seen: dict = {}
     wrapped = {
         name: getattr(ws, name) for name in ("_boundary_corrected_sums", "_edge_crossings", "_faded_cube_fraction")
     }
 
-    def sums(values, axes, box, resolution, sampled, inside, *rest):
+    def sums(values, axes, box, sampled, inside, f0, f1, steps, ic):
         # each sampled axis's cell width, as the grid's: the box over its nodes
         widths = [(float(box[1][j]) - float(box[0][j])) / len(axes[j]) for j in sampled]
-        seen.update(values=values, axes=axes, box=box, sampled=sampled, inside=inside, widths=widths)
-        seen["sums"] = wrapped["_boundary_corrected_sums"](values, axes, box, resolution, sampled, inside, *rest)
+        seen.update(values=values, axes=axes, box=box, sampled=sampled, inside=inside, widths=widths, ic=ic)
+        seen["sums"] = wrapped["_boundary_corrected_sums"](values, axes, box, sampled, inside, f0, f1, steps, ic)
         return seen["sums"]
 
     def crossings(*args, **kwargs):
@@ -141,9 +140,9 @@ def linear_margins(seen: dict, nodes: np.ndarray, secant: bool = True) -> tuple[
     the captured grid: each margin's value at the node (M, K + 1) and its change per cell width
     along the sampled axes (M, K + 1, d), NaN where unknown; the secants through the captured
     crossings (``secant=False``: the differences alone, no crossings)."""
-    values, axes, inside, sampled, widths = (seen[k] for k in ("values", "axes", "inside", "sampled", "widths"))
-    poses = _grid_poses(axes, 0, inside.size)
-    ic = values(poses)[2].reshape(inside.shape)
+    values, axes, inside, sampled, widths, ic = (
+        seen[k] for k in ("values", "axes", "inside", "sampled", "widths", "ic")
+    )
     sides = []
     for side in (1, 0):  # the crossing above each node, then below
         node, axis, distance, dexterity = [], [], [], []

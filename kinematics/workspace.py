@@ -1163,7 +1163,6 @@ def _boundary_corrected_sums(
     values: _PointValues,
     axes: list[np.ndarray],
     box: tuple[np.ndarray, np.ndarray],
-    resolution: int,
     sampled: list[int],
     inside: np.ndarray,
     f0: np.ndarray,
@@ -1176,7 +1175,7 @@ def _boundary_corrected_sums(
     ``f`` at the centroid of its inside part (see :func:`_integrate_grid`). ``ic``: the
     nodes' ``1/kappa`` (NaN where unreachable)."""
     if kernels.compiled():
-        return _boundary_corrected_sums_compiled(values, axes, box, resolution, sampled, inside, f0, f1, steps, ic)
+        return _boundary_corrected_sums_compiled(values, axes, box, sampled, inside, f0, f1, steps, ic)
     n_sampled = len(sampled)
     nearest = np.empty((n_sampled,) + inside.shape)
     toward = np.empty((n_sampled,) + inside.shape)
@@ -1732,7 +1731,6 @@ def _boundary_corrected_sums_compiled(
     values: _PointValues,
     axes: list[np.ndarray],
     box: tuple[np.ndarray, np.ndarray],
-    resolution: int,
     sampled: list[int],
     inside: np.ndarray,
     f0: np.ndarray,
@@ -1979,7 +1977,6 @@ def _integrate_grid(
             values,
             axes,
             box,
-            resolution,
             sampled,
             inside.reshape(shape),
             f0.reshape(shape),
