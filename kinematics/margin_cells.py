@@ -72,9 +72,8 @@ class NodeMargins:
         poses = np.column_stack([axes[j][index[j]] for j in range(inside.ndim)])
         reach = values.margins(poses)
         dexterity = ic.ravel()[where] ** 2 - values.min_ic**2
-        self.count = reach.shape[1] + 1
         # one row of NaN at the end: the value of a node off the grid or not computed
-        self.table = np.vstack([np.column_stack([reach, dexterity]), np.full((1, self.count), np.nan)])
+        self.table = np.vstack([np.column_stack([reach, dexterity]), np.full((1, reach.shape[1] + 1), np.nan)])
         self.slot = np.full(inside.size, where.size, dtype=np.int64)
         self.slot[where] = np.arange(where.size)
         self.strides = [int(np.prod(inside.shape[j + 1 :])) for j in range(inside.ndim)]

@@ -278,6 +278,15 @@ def study_labels(keys: list[tuple]) -> list[str]:
     ]
 
 
+def tradeoff_lines(best: pd.DataFrame) -> tuple[pd.DataFrame, list[str]]:
+    """The mixed-index rows of ``best`` (with ``study_hash``, :func:`with_study`) and the keys of
+    the trade-off's lines within a mechanism: optimiser and experiment where the table has them,
+    then ``study_hash`` (a dataset from before study_hash existed still keeps optimisers and
+    experiments apart)."""
+    mixed = with_study(best[best["objective"].astype(str) == "mixed"])
+    return mixed, [k for k in ("optimizer", "experiment") if k in mixed.columns] + ["study_hash"]
+
+
 def beaten_optima(best: pd.DataFrame) -> pd.DataFrame:
     """Mixed-index optima that another run's design of the same study beats at their own w_d.
 
@@ -313,10 +322,8 @@ def beaten_optima(best: pd.DataFrame) -> pd.DataFrame:
     needed = {"objective", "mechanism", "w_d", "gdi", "suri", "objective_value"}
     if not needed <= set(best.columns):
         return pd.DataFrame(columns=columns)
-    mixed = with_study(best[best["objective"].astype(str) == "mixed"])
-    # the trade-off's groups: a dataset from before study_hash existed still keeps optimisers and
-    # experiments apart
-    keys = ["mechanism", *(k for k in ("optimizer", "experiment") if k in mixed.columns), "study_hash"]
+    mixed, line_keys = tradeoff_lines(best)
+    keys = ["mechanism", *line_keys]
     rows = []
     for key, group in mixed.groupby(keys, sort=True):
         mechanism, study = key[0], key[-1]
@@ -370,8 +377,7 @@ def plot_tradeoff(best: pd.DataFrame, path: Path, plot=None) -> Path:
     (:func:`distinct_seeds`); η carries error bars, its estimated discretisation error
     (``objective_error``, the largest over the seeds). Panels in rows of at most three (:func:`panel_grid`).
     """
-    mixed = with_study(best[best["objective"].astype(str) == "mixed"])
-    group_keys = [k for k in ("optimizer", "experiment") if k in mixed.columns] + ["study_hash"]
+    mixed, group_keys = tradeoff_lines(best)
     keys = [k for k in ("mechanism", *group_keys, "w_d") if k in mixed.columns]
     mixed = distinct_seeds(mixed, keys)
     mechanisms = sorted(mixed["mechanism"].astype(str).unique()) or ["none"]
