@@ -43,7 +43,15 @@ import argparse
 import numpy as np
 from scipy.ndimage import maximum_filter, minimum_filter
 
-from benchmarks.accuracy import METHODS, REFERENCE_FACTOR, SCAN, SCAN_SEED, designs, random_designs
+from benchmarks.accuracy import (
+    METHODS,
+    REFERENCE_FACTOR,
+    SCAN,
+    SCAN_SEED,
+    designs,
+    random_designs,
+    reference_method,
+)
 from kinematics import MECHANISMS, kernels, margin_cells
 from kinematics import workspace as ws
 from kinematics.polytope import clipped_cell
@@ -138,26 +146,13 @@ def linear_margins(seen: dict, nodes: np.ndarray, secant: bool = True) -> tuple[
     """The rule "linear margins" of ``evaluate(method="margins")``
     (:func:`kinematics.margin_cells.linear_margins`) in the cells of ``nodes`` (flat indices) of
     the captured grid: each margin's value at the node (M, K + 1) and its change per cell width
-    along the sampled axes (M, K + 1, d), NaN where unknown; the secants through the captured
-    crossings (``secant=False``: the differences alone, no crossings)."""
-    values, axes, inside, sampled, widths, ic = (
-        seen[k] for k in ("values", "axes", "inside", "sampled", "widths", "ic")
-    )
-    sides = []
-    for side in (1, 0):  # the crossing above each node, then below
-        node, axis, distance, dexterity = [], [], [], []
-        for k, ((*distances, at_minus, at_plus), width) in enumerate(zip(seen["crossings"], widths)):
-            there = distances[side].ravel()
-            has = np.nonzero(np.isfinite(there))[0] if secant else np.zeros(0, dtype=int)
-            weight, weighted = (at_plus if side else at_minus).reshape(2, -1)[:, has]
-            with np.errstate(divide="ignore", invalid="ignore"):
-                dexterity.append(np.where(weight > 0, (weighted / weight) ** 2 - values.min_ic**2, np.nan))
-            node.append(has)
-            axis.append(np.full(has.size, k))
-            distance.append(there[has] / width)
-        sides.append(tuple(np.concatenate(part) for part in (node, axis, distance, dexterity)))
-    margins = margin_cells.NodeMargins(values, axes, inside, ic, nodes)
-    return margin_cells.linear_margins(values, axes, sampled, widths, margins, sides, nodes)
+    along the sampled axes (M, K + 1, d), NaN where unknown; the secants through the crossings
+    of :func:`kinematics.workspace._margin_secants` (``secant=False``: the differences alone)."""
+    values, axes, inside, sampled, ic = (seen[k] for k in ("values", "axes", "inside", "sampled", "ic"))
+    poses = ws._node_poses(axes, list(np.unravel_index(np.arange(inside.size), inside.shape)))
+    margins = margin_cells.NodeMargins(values.margins(poses), ic, values.min_ic)
+    secants = ws._margin_secants(values, axes, sampled, margins, inside) if secant else None
+    return margin_cells.linear_margins(margins, sampled, secants, nodes)
 
 
 def linear_margin_inside(seen: dict, nodes: np.ndarray, offsets: np.ndarray) -> np.ndarray:
@@ -217,7 +212,7 @@ def volume_errors(mech, resolutions: list[int | None]) -> list[tuple]:
     whole grid: :mod:`kinematics.margin_cells`); without the secants, its V from the nodes'
     margins alone. No Monte Carlo: the errors are the rules' own."""
     r0 = max(ws.default_resolution(mech, method=method) for method in METHODS)  # as benchmarks.accuracy's scan
-    reference = ws.evaluate(mech, resolution=REFERENCE_FACTOR * r0, error_estimate=False)
+    reference = ws.evaluate(mech, resolution=REFERENCE_FACTOR * r0, method=reference_method(mech), error_estimate=False)
     rows = []
     for resolution in resolutions:
         seen = _captured_grid(mech, resolution)

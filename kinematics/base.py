@@ -34,6 +34,9 @@ from kinematics import kernels
 from kinematics.algebra import newton_polish, unique_rows, wrap_angle
 from kinematics.conditioning import inverse_condition_number
 
+#: the cell rules of ``method="grid"`` a mechanism may declare (:attr:`Mechanism.cell_rule`)
+CELL_RULES = ("planes", "margins")
+
 #: poses per block of the compiled Jacobian + conditioning path (see ``Mechanism._blocked``)
 CONDITIONING_BLOCK = 8192
 
@@ -69,6 +72,8 @@ class Mechanism(ABC):
 
     def __init_subclass__(cls, **kwargs: object) -> None:
         super().__init_subclass__(**kwargs)
+        if cls.cell_rule not in CELL_RULES:
+            raise TypeError(f"{cls.__name__}.cell_rule must be one of {CELL_RULES}; got {cls.cell_rule!r}")
         # one source: the defaults of mechanism.fixed come from the declared parameters
         if "fixed_parameters" in cls.__dict__:
             cls.default_fixed = {p.name: p.default for p in cls.fixed_parameters}
@@ -285,6 +290,12 @@ class Mechanism(ABC):
     #: the node budget of ``method="grid"`` (None: :attr:`default_nodes`), chosen per mechanism
     #: from the error-cost curve of docs/accuracy.md (its cells near the boundary cost more)
     grid_nodes: ClassVar[int | None] = None
+    #: how ``method="grid"`` counts the cells along the workspace's boundary: ``"planes"`` (each
+    #: cell cut by one plane through its nearest crossings) or ``"margins"`` (each reachability
+    #: and the dexterity margin linear over the cell, the part where all hold:
+    #: :mod:`kinematics.margin_cells`; needs :meth:`constraint_margins`, no exact axis and 1 to 3
+    #: sampled axes), chosen per mechanism from the error-cost measurements of docs/accuracy.md
+    cell_rule: ClassVar[str] = "planes"
     #: nodes of ``method="grid"`` along a pose variable, as a multiple of ``resolution``, where
     #: not 1 (rounded up): an axis along which the workspace's margins and ``1/kappa`` vary
     #: slowly needs fewer (H4: theta, docs/accuracy.md)

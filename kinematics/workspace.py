@@ -69,13 +69,16 @@ import numpy as np
 
 from kinematics import kernels, margin_cells
 from kinematics.base import Mechanism
+from kinematics.polytope import plane_cut
 from kinematics.rows import row_all
 
 #: poses evaluated per vectorised chunk (bounds memory, not a per-pose loop)
 CHUNK = 1 << 17
-METHODS = ("grid", "midpoint", "polar", "margins")
-#: the methods that count boundary cells by fractions, on the grid method's node budget and axes
-FRACTION_METHODS = ("grid", "margins")
+METHODS = ("grid", "midpoint", "polar", "margins", "planes")
+#: the methods that count boundary cells by fractions, on the grid method's node budget and axes:
+#: ``grid`` by the mechanism's :attr:`~kinematics.base.Mechanism.cell_rule`, ``margins`` and
+#: ``planes`` by that rule whatever the mechanism's
+FRACTION_METHODS = ("grid", "margins", "planes")
 #: the second resolution of the error estimate of ``method="grid"``, a fraction of the first
 ERROR_RESOLUTION = 0.5
 
@@ -1145,7 +1148,8 @@ def _prism_cut(c: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     plane scaled down next to a node (:func:`_plane_slopes`: 1e4 and slopes down to 1e-3) lost
     up to 1e-3 of a cell to their cancellation (0.5 of a cell in 4-D), the compiled and numpy
     paths differing by as much. Returns ``(prism (N,) bool, volume (N,), centroid (N, d))``,
-    the last two meaningful where ``prism``. :func:`_prism_plane_cut` is the same for one cell."""
+    the last two meaningful where ``prism``. :func:`kinematics.polytope.prism_plane_cut` is the same
+    for one cell."""
     top_axis = np.argmax(c, axis=1)
     rows = np.arange(c.shape[0])
     top = c[rows, top_axis]
@@ -1328,91 +1332,9 @@ def _crossing_weights(slopes: np.ndarray) -> np.ndarray:
 
 
 @kernels.inline_jit
-def _prism_plane_cut(c, fraction_centroid, active, n_active):
-    """:func:`_prism_cut` of one cell (the same operations) into ``fraction_centroid`` (d + 1,),
-    the axes of non-zero slope ``active[:n_active]``; False (nothing written) where the plane
-    does not cross every edge along its steepest axis."""
-    top_axis = active[0]
-    for a in range(1, n_active):
-        if c[active[a]] > c[top_axis]:
-            top_axis = active[a]
-    top = c[top_axis]
-    others = 0.0
-    squares = 0.0
-    for a in range(n_active):
-        j = active[a]
-        if j != top_axis:
-            others += c[j]
-            squares += c[j] * c[j]
-    if not top >= 2.0 + others:
-        return False
-    volume = 0.5 + 1.0 / top
-    fraction_centroid[0] = min(max(volume, 0.0), 1.0)
-    for a in range(n_active):
-        j = active[a]
-        if j != top_axis:
-            fraction_centroid[j + 1] = min(max(-c[j] / (12.0 * top * volume), -0.5), 0.5)
-    part = (volume * volume + squares / (12.0 * top * top)) / (2.0 * volume) - 0.5
-    fraction_centroid[top_axis + 1] = min(max(part, -0.5), 0.5)
-    return True
-
-
-@kernels.inline_jit
-def _plane_cut(c, fraction_centroid, active, moment):
-    """:func:`_cube_fraction` of one cell: slopes ``c`` (d,) in, ``fraction_centroid`` (d + 1,)
-    out (the fraction, then the centroid per axis; 0 along axes of zero slope); ``active``
-    (d, int) and ``moment`` (d,) are scratch (no allocation per cell)."""
-    d = c.shape[0]
-    n_active = 0
-    for j in range(d):
-        fraction_centroid[j + 1] = 0.0
-        if c[j] > 0.0:
-            active[n_active] = j
-            n_active += 1
-    fraction_centroid[0] = 1.0
-    if n_active == 0:
-        return
-    if _prism_plane_cut(c, fraction_centroid, active, n_active):
-        return
-    bound = 1.0
-    scale = 1.0
-    for a in range(n_active):
-        bound += 0.5 * c[active[a]]
-        scale *= c[active[a]] * (a + 1)  # d! prod c
-    volume = 0.0
-    integral = 0.0
-    moment[:n_active] = 0.0
-    for corner in range(1 << n_active):
-        level = bound
-        parity = 0
-        for a in range(n_active):
-            if (corner >> a) & 1:
-                level -= c[active[a]]
-                parity += 1
-        if level <= 0.0:
-            continue
-        sign = -1.0 if parity % 2 else 1.0
-        power = level
-        for _ in range(n_active - 1):  # level**n_active without a call to pow
-            power *= level
-        volume += sign * power
-        integral += sign * power * level
-        for a in range(n_active):
-            if (corner >> a) & 1:
-                moment[a] += sign * power
-    volume /= scale
-    integral /= scale * (n_active + 1)
-    fraction_centroid[0] = min(max(volume, 0.0), 1.0)
-    if volume > 0.0:
-        for a in range(n_active):
-            part = (moment[a] / scale + integral / c[active[a]]) / volume - 0.5
-            fraction_centroid[active[a] + 1] = min(max(part, -0.5), 0.5)
-
-
-@kernels.inline_jit
 def _faded_plane_cut(c, plane, cut, part, active, moment):
     """:func:`_faded_cube_fraction` of one cell: slopes ``c`` (d,) in, ``cut`` (d + 1,) out (as
-    :func:`_plane_cut`); ``plane`` (d,), ``part`` (d + 1,), ``active``, ``moment`` scratch. Only
+    :func:`kinematics.polytope.plane_cut`); ``plane`` (d,), ``part`` (d + 1,), ``active``, ``moment`` scratch. Only
     the cuts of non-zero weight are made (a crossing of weight 1 is always kept, one of weight
     0 always left out: most cells have no fading crossing and one cut), in the numpy path's
     order, so that the sums are the same."""
@@ -1439,7 +1361,7 @@ def _faded_plane_cut(c, plane, cut, part, active, moment):
                 weight *= (1.0 - fade) if (dropped >> j) & 1 else fade
             plane[j] = 0.0 if ((dropped | gone) >> j) & 1 else _plane_slope(c[j], top)
         if weight > 0.0:
-            _plane_cut(plane, part, active, moment)
+            plane_cut(plane, part, active, moment)
             cut[0] += weight * part[0]
             for j in range(d):
                 cut[j + 1] += (weight * part[0]) * part[j + 1]
@@ -1618,6 +1540,101 @@ def _cut_edges(inside, strides, sizes):
                     axis[i], lower[i] = k, p
                     i += 1
     return axis, lower
+
+
+@kernels.jit
+def _edge_first_roots(inside, table, lower, stride):
+    """Per grid edge from node ``lower`` to ``lower + stride`` (E,) whose ends differ in
+    membership (``inside`` (N,)): its inside and outside end nodes, and the first sign change
+    of the margins (rows of ``table``, (N + 1, K + 1)) linear between them, as a fraction of
+    the way from the inside end over the margins known at both ends (NaN: none changes sign)."""
+    e, count = lower.shape[0], table.shape[1]
+    inner = np.empty(e, dtype=np.int64)
+    outer = np.empty(e, dtype=np.int64)
+    first = np.empty(e)
+    for i in range(e):
+        a, b = lower[i], lower[i] + stride[i]
+        if not inside[a]:
+            a, b = b, a
+        inner[i], outer[i] = a, b
+        best = np.inf
+        for c in range(count):
+            g_in, g_out = table[a, c], table[b, c]
+            if g_in >= 0.0 and g_out < 0.0:
+                best = min(best, g_in / (g_in - g_out))
+        first[i] = best if best < np.inf else np.nan
+    return inner, outer, first
+
+
+def _margin_secants(
+    values: _PointValues,
+    axes: list[np.ndarray],
+    sampled: list[int],
+    margins: margin_cells.NodeMargins,
+    inside: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+    """The crossings of ``method="margins"``: on every grid edge whose ends differ in membership,
+    the margin that vanishes first along it and where, seen from both ends (the secants of
+    :func:`kinematics.margin_cells.linear_margins`). None where no edge is cut.
+
+    Steps 1-2 of :func:`_crossings` on the nodes' margins (``margins.table``, reachability and
+    dexterity margins of every node): the margins linear between the ends, their first sign
+    change ``t1`` over the margins known at both ends; one look at ``t1`` (the reachability
+    margins and ``1/kappa`` there); each margin as the parabola through its three values, its
+    first root in the bracket where they change sign (:func:`_refined_crossing`). Third order in
+    the edge length, continuous in the design. Why not :func:`_crossings` itself: the rule
+    needs the crossing's margin, not the integrands there, and the ends' margins are known; its
+    membership test, second looks and the margins at both ends again cost the Tricept at 20 per
+    axis a third of its evaluation. An edge whose margins do not change sign between its ends
+    (an end's margin undefined) has no secant.
+
+    Returns
+    -------
+    node, axis, distance, column : ndarray (2E,) each
+        Per crossing and end: the end node (flat index), the sampled axis (index into
+        ``sampled``), the signed distance from the node to the crossing (cell widths, + towards
+        the node above) and the vanishing margin (a column of ``margins.table``; K the dexterity
+        margin).
+    """
+    flat_inside = np.ascontiguousarray(inside.ravel())
+    strides = np.array([margins.strides[j] for j in sampled], dtype=np.int64)
+    sizes = np.array([inside.shape[j] for j in sampled], dtype=np.int64)
+    axis, lower = _cut_edges(flat_inside, strides, sizes)
+    if not axis.size:
+        return None
+    table = margins.table
+    k = table.shape[1] - 1
+    inner, outer, linear = _edge_first_roots(flat_inside, table, lower, strides[axis])
+    ahead = inner == lower  # the crossing lies ahead of the lower node where it is inside
+    look = np.nonzero(np.isfinite(linear))[0]
+    if not look.size:
+        return None
+    t1 = linear[look]
+    g_in, g_out = table[inner[look]], table[outer[look]]
+    column = np.asarray(sampled, dtype=np.int64)[axis[look]]
+    at = _node_poses(axes, list(np.unravel_index(inner[look], inside.shape)))
+    rows = np.arange(look.size)
+    towards = np.where(ahead[look], 1.0, -1.0)
+    widths = np.array([axes[j][1] - axes[j][0] if axes[j].size > 1 else 0.0 for j in sampled])
+    at[rows, column] += towards * t1 * widths[axis[look]]
+    reach_1 = values.margins(at)
+    _, _, ic_1, _ = values(at)
+    refined = _refined_crossing_compiled if kernels.compiled() else _refined_crossing
+    reach = np.ascontiguousarray(np.vstack([g_in[:, :k], g_out[:, :k]]))
+    t2, which = refined(
+        reach,
+        np.ascontiguousarray(reach_1),
+        np.ascontiguousarray(g_in[:, k]),
+        ic_1**2 - values.min_ic**2,
+        np.ascontiguousarray(g_out[:, k]),
+        rows,
+        t1,
+    )
+    found = which >= 0
+    t2, which, towards, look = t2[found], which[found], towards[found], look[found]
+    node = np.concatenate([inner[look], outer[look]])
+    distance = np.concatenate([towards * t2, -towards * (1.0 - t2)])
+    return node, np.tile(axis[look], 2), distance, np.tile(which, 2)
 
 
 def _sparse_crossings(
@@ -1957,10 +1974,13 @@ def _integrate_grid(
     )
     parts = []
     kept = []
+    reach = []  # the nodes' reachability margins, for method "margins"
     for start, stop in _chunk_bounds(axes):
         poses = _grid_poses(axes, start, stop)
         inside, weight, ic, extent = values(poses, oriented, keep_samples)
         parts.append((inside, weight, ic))
+        if sampled and margins:
+            reach.append(values.margins(poses))
         if keep_samples:
             kept.append((poses, ic, inside) + (() if extent is None else (extent,)))
     inside, weight, ic = (np.concatenate(k) for k in zip(*parts))
@@ -1968,9 +1988,10 @@ def _integrate_grid(
     n_inside = int(inside.sum())
     f0, f1 = _integrands(inside, weight, ic)
     if sampled and margins:
-        cut = _sparse_crossings(values, axes, box, sampled, inside.reshape(shape), f0, f1, steps, ic)
+        node_margins = margin_cells.NodeMargins(np.concatenate(reach), ic.reshape(shape), values.min_ic)
+        secants = _margin_secants(values, axes, sampled, node_margins, inside.reshape(shape))
         weight_sum, ic_sum = margin_cells.margin_cell_sums(
-            values, axes, sampled, inside.reshape(shape), ic.reshape(shape), cut
+            node_margins, sampled, inside.reshape(shape), ic.reshape(shape), secants, values.min_ic
         )
     elif sampled:
         weight_sum, ic_sum = _boundary_corrected_sums(
@@ -2261,13 +2282,14 @@ def _integrate_polar(mechanism, resolution, orientation, min_ic, length, keep_sa
 
 
 def _check_margins_method(mechanism: Mechanism, orientation: tuple[float, float], fixed: dict[str, float]) -> None:
-    """ValueError (one line) where ``method="margins"`` cannot integrate: a mechanism without
-    reachability margins, with an exact axis, or a grid of more than 3 sampled axes."""
+    """ValueError (one line) where the linear-margins cell rule (``method="margins"``, or a
+    mechanism's ``cell_rule``) cannot integrate: a mechanism without reachability margins, with
+    an exact axis, or a grid of more than 3 sampled axes."""
     exact = _exact_axis(mechanism, fixed)
     if exact is not None:
         raise ValueError(
             f"method 'margins' does not integrate an exact axis ({mechanism.name} integrates "
-            f"{mechanism.pose_names[exact]} exactly); use method 'grid'"
+            f"{mechanism.pose_names[exact]} exactly); use method 'planes'"
         )
     if mechanism.constraint_margins(np.zeros((1, mechanism.dof))) is None:
         raise ValueError(f"method 'margins' needs a mechanism with constraint_margins; {mechanism.name} has none")
@@ -2275,7 +2297,7 @@ def _check_margins_method(mechanism: Mechanism, orientation: tuple[float, float]
     if not 1 <= len(names) <= 3:
         raise ValueError(
             f"method 'margins' needs 1 to 3 sampled pose axes; {mechanism.name} samples {len(names)} "
-            f"({', '.join(names) or 'none'}) here: fix some (fixed=...) or use method 'grid'"
+            f"({', '.join(names) or 'none'}) here: fix some (fixed=...) or use method 'planes'"
         )
 
 
@@ -2316,14 +2338,17 @@ def evaluate(
     length : float, optional
         Characteristic length homogenising the Jacobian (default: the
         mechanism's).
-    method : {"grid", "midpoint", "polar", "margins"}
+    method : {"grid", "midpoint", "polar", "margins", "planes"}
         The grid with boundary cells counted by their inside fraction (the
         default: second order, continuous in the design; dearer than the plain
-        count at the defaults, docs/accuracy.md), the plain cell-centre count (first order,
-        the objective of earlier versions), the Tricept paper's polar
-        boundary search, or the same grid with the boundary cells counted under linear
-        margins (:mod:`kinematics.margin_cells`; not yet a default: mechanisms with margins
-        and no exact axis, at most 3 sampled axes; its default resolution is the grid's).
+        count at the defaults, docs/accuracy.md), each cell by the mechanism's
+        :attr:`~kinematics.base.Mechanism.cell_rule` (one plane through its crossings, or
+        linear margins: the Tricept's); the plain cell-centre count (first order,
+        the objective of earlier versions); the Tricept paper's polar
+        boundary search; or the grid with either cell rule whatever the mechanism's:
+        ``"margins"`` (:mod:`kinematics.margin_cells`: mechanisms with margins and no exact axis,
+        at most 3 sampled axes) or ``"planes"``. All three grids take the grid's default
+        resolution.
     fixed : dict, optional
         Pose variables held at a value (e.g. ``{"z": 0.0}`` for a slice);
         the volume is the measure over the others.
@@ -2365,7 +2390,9 @@ def evaluate(
 
     if method == "polar" and fixed:
         raise ValueError("fixed pose variables are not supported with method 'polar'")
-    if method == "margins":
+    # the linear-margins cell rule: asked for, or the grid method's rule for this mechanism
+    margins = method == "margins" or (method == "grid" and mechanism.cell_rule == "margins")
+    if margins:
         _check_margins_method(mechanism, orientation, fixed)
 
     # exact sections (3-RPR): method "grid" integrates the section axis in closed form
@@ -2388,7 +2415,7 @@ def evaluate(
             fixed,
             return_samples,
             refine=method in FRACTION_METHODS,
-            margins=method == "margins",
+            margins=margins,
         )
     volume_error = gdi_error = math.nan
     if error_estimate:
@@ -2414,7 +2441,7 @@ def evaluate(
                 length,
                 fixed,
                 False,
-                margins=method == "margins",
+                margins=margins,
             )
         else:
             other_volume, (other_mean, _, _), *_ = _integrate_grid(

@@ -9,9 +9,10 @@ from fractions import Fraction
 import numpy as np
 import pytest
 
-from benchmarks.accuracy import OPTIMA, best_known_design, optimum
+from benchmarks.accuracy import OPTIMA, best_known_design, optimum, reference_method
 from kinematics import MECHANISMS, get_mechanism, kernels
 from kinematics.annuli import annuli_x_sections, annuli_y_extent, planar_legs_signed_inverse_condition
+from kinematics.polytope import plane_cut
 from kinematics.workspace import (
     FADE_FROM,
     SECTION_NODES,
@@ -21,7 +22,6 @@ from kinematics.workspace import (
     _faded_cube_fraction,
     _faded_plane_cut,
     _multisect,
-    _plane_cut,
     _reachable_orientations,
     default_resolution,
     evaluate,
@@ -109,7 +109,7 @@ def test_a_plane_scaled_down_next_to_a_node_is_cut_without_cancellation(slopes):
     exact = float(_exact_cut(slopes))
     assert _cube_fraction(c)[0][0] == pytest.approx(exact, abs=1e-14)
     out = np.empty(len(slopes) + 1)
-    _plane_cut(c[0], out, np.empty(len(slopes), dtype=np.int64), np.empty(len(slopes)))
+    plane_cut(c[0], out, np.empty(len(slopes), dtype=np.int64), np.empty(len(slopes)))
     assert out[0] == pytest.approx(exact, abs=1e-14)
     np.testing.assert_allclose(out[1:], _cube_fraction(c)[1][0], atol=1e-15)
 
@@ -413,9 +413,9 @@ def test_multisection_finds_the_outermost_crossing_to_its_resolution():
 
 def test_grid_method_has_its_own_node_budget():
     tricept = get_mechanism("tricept", **PAPER_DESIGNS["tricept"])
-    assert default_resolution(tricept, method="midpoint") == 32 and default_resolution(tricept) == 28
+    assert default_resolution(tricept, method="midpoint") == 32 and default_resolution(tricept) == 20
     assert evaluate(tricept, error_estimate=False).method == "grid"  # the default
-    assert evaluate(tricept, error_estimate=False).resolution == 28
+    assert evaluate(tricept, error_estimate=False).resolution == 20
     rpr3 = get_mechanism("rpr3", **PAPER_DESIGNS["rpr3"])  # no grid budget: the default one
     assert default_resolution(rpr3) == default_resolution(rpr3, method="midpoint") == 32
 
@@ -432,14 +432,14 @@ THIN = {
     # scan 3: a sliver of 9e-6 of the reference volume, 0.56 % off with rows across the pose box;
     # rows across each layer's extent now
     "rpr3": [259.41388575040924, 57.434796227497664],
-    "tricept": [255.34973520744924, 499.10005668687853, 162.67914545847555],  # scan 5: V 0.11 %
+    # scan 5: V 0.11 % with one plane per cell at 28^3; its linear margins (cell_rule) hold it now
+    "tricept": [255.34973520744924, 499.10005668687853, 162.67914545847555],
 }
 #: measured misses of the 0.1 % target (benchmarks/accuracy.py); strict: they fail today, and a
 #: cell rule that holds two boundaries per cell should turn them into passes
 _THIN_CELL = "one plane per cell cannot hold a feature thinner than a cell (docs/accuracy.md)"
 KNOWN_MISSES: dict[tuple[str, str], str] = {
     ("delta", "thin"): _THIN_CELL,
-    ("tricept", "thin"): _THIN_CELL,
 }
 
 
@@ -473,7 +473,7 @@ def test_default_resolution_within_0p1_percent_of_a_fine_reference(name, label):
     reference = default_resolution(mech)
     if label == "thin":  # the scan's reference (benchmarks/accuracy.py): 4x the finer of the two defaults
         reference = max(reference, default_resolution(mech, method="midpoint"))
-    ref = evaluate(mech, resolution=4 * reference, error_estimate=False, method="grid")
+    ref = evaluate(mech, resolution=4 * reference, error_estimate=False, method=reference_method(mech))
     assert ev.volume == pytest.approx(ref.volume, rel=TARGET)
     assert ev.gdi == pytest.approx(ref.gdi, rel=TARGET)
     assert ev.mixed(W_D) == pytest.approx(ref.mixed(W_D), rel=TARGET)
@@ -498,11 +498,12 @@ def eta_along_a_line(
     points: int = 15,
     centre: np.ndarray | None = None,
     step: float = 5e-4,
+    resolution: int | None = None,
 ) -> np.ndarray:
     """eta (w_d = 0.5) along one design variable (:data:`LINES`' where None), ``points`` steps of
     ``step`` of its range (0.05 %), centred on ``centre`` (default: a documented optimum,
     :data:`LINES`, or the middle of the design box), and shifted to stay within the variable's
-    bounds (an optimum may lie on one)."""
+    bounds (an optimum may lie on one); at ``resolution`` (None: the method's default)."""
     cls = MECHANISMS[name]
     lo = np.array([v.lower for v in cls.design_variables])
     hi = np.array([v.upper for v in cls.design_variables])
@@ -515,7 +516,8 @@ def eta_along_a_line(
     for k in range(points):
         x = centre.copy()
         x[j] = first + k * step
-        out.append(evaluate(cls.from_design(x, **cls.default_fixed), method=method, error_estimate=False).mixed(W_D))
+        mech = cls.from_design(x, **cls.default_fixed)
+        out.append(evaluate(mech, method=method, resolution=resolution, error_estimate=False).mixed(W_D))
     return np.array(out)
 
 
@@ -544,17 +546,13 @@ def test_no_spike_where_a_crossing_s_look_falls_just_outside():
     assert not has_a_step(eta_along_a_line("h4", "grid", 0, points=31, centre=old, step=5e-5))
 
 
-#: measured misses of the continuity test, strict: they fail today. The step at H4's h4_mixed best
-#: known (a spike of 2e-5 of eta where a crossing's look fell just outside the reach boundary)
-#: and those of 1e-6 from the occupied box, the crossings' models and the planes' corner cuts are
-#: gone (kinematics.workspace); one remains, in a slab thinner than a cell (docs/accuracy.md)
-STEP_MISSES: dict[tuple[str, str], str] = {
-    # 0.4 % of b above its lower bound: a node inside a slab 0.73 cells wide along the Tricept's
-    # second sampled axis leaves it through the slab's far side; the edge to its outside
-    # neighbour stops being cut, and the crossing on it, 0.27 cells from that neighbour, is lost
-    # with 0.23 of its cell (1.8e-5 of eta)
-    ("tricept", "b"): "a slab thinner than a cell loses a crossing when its one node leaves it (docs/accuracy.md)",
-}
+#: measured misses of the continuity test, strict: they fail today (none now). The step at H4's
+#: h4_mixed best known (a spike of 2e-5 of eta where a crossing's look fell just outside the reach
+#: boundary) and those of 1e-6 from the occupied box, the crossings' models and the planes' corner
+#: cuts are gone (kinematics.workspace); the last, in a slab thinner than a cell along the
+#: Tricept's b, went with its linear margins (``Tricept.cell_rule``; one plane per cell still
+#: steps there: test_one_plane_per_cell_steps_where_a_slab_empties)
+STEP_MISSES: dict[tuple[str, str], str] = {}
 
 
 def _every_variable(names: tuple[str, ...]) -> list:
@@ -580,6 +578,17 @@ def test_eta_along_a_line_has_no_steps(name, variable):
     """Through the optimum along every design variable (a reviewer walks them all: along the
     Tricept's second the plane's corner cuts stepped by 3e-5 of eta before they faded out)."""
     assert not has_a_step(eta_along_a_line(name, "grid", variable))
+
+
+@pytest.mark.slow
+def test_one_plane_per_cell_steps_where_a_slab_empties():
+    """The Tricept's b through its optimum with one plane per cell (its cell rule before linear
+    margins, at its node budget then, 28 per axis): 0.4 % of b above its lower bound a node
+    inside a slab 0.73 cells wide leaves it through the slab's far side; the edge to its outside
+    neighbour stops being cut, and the crossing on it, 0.27 cells from that neighbour, is lost
+    with 0.23 of its cell (1.8e-5 of eta). Linear margins keep the slab's two faces in the
+    cell (test_eta_along_a_line_has_no_steps[tricept-b])."""
+    assert has_a_step(eta_along_a_line("tricept", "planes", 1, resolution=28))
 
 
 @pytest.mark.slow

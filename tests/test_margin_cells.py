@@ -20,16 +20,20 @@ def error(ev, ref) -> np.ndarray:
 
 @pytest.mark.parametrize("label", ["scan 0", "scan 5"])
 def test_the_tricept_at_a_third_of_the_nodes_is_within_0_1_percent(label):
-    """At 20 nodes per axis (8,000 against the grid method's 28^3 = 21,952), V, GDI and eta within
-    0.1 % of the grid method at 4 x 32 (measured on the ladder's 6 and the scan's 10 designs: at
-    most 0.075 %); the grid method at 20 misses on scan 0 (V +0.254 %), so this can fail."""
+    """At 20 nodes per axis (8,000 against the 28^3 = 21,952 one plane per cell needed), V, GDI
+    and eta within 0.1 % of one plane per cell at 4 x 32 (an independent rule; measured on the
+    ladder's 6 and the scan's 10 designs: at most 0.075 %); one plane per cell at 20 misses on
+    scan 0 (V +0.254 %), so this can fail. The Tricept's grid method is this rule
+    (``Tricept.cell_rule``), bit for bit."""
     mech = dict(random_designs("tricept", SCAN_SEED, SCAN, "scan"))[label]
-    ref = evaluate(mech, resolution=128, error_estimate=False)
+    ref = evaluate(mech, resolution=128, method="planes", error_estimate=False)
     margins = evaluate(mech, resolution=20, method="margins", error_estimate=False)
     assert margins.method == "margins" and margins.resolution == 20
     assert error(margins, ref).max() < 0.1
+    grid = evaluate(mech, error_estimate=False)
+    assert (grid.method, grid.resolution, grid.volume, grid.gdi) == ("grid", 20, margins.volume, margins.gdi)
     if label == "scan 0":
-        assert error(evaluate(mech, resolution=20, error_estimate=False), ref)[0] > 0.2
+        assert error(evaluate(mech, resolution=20, method="planes", error_estimate=False), ref)[0] > 0.2
 
 
 def test_the_delta_s_scan_miss_is_met_at_its_default():
@@ -81,3 +85,16 @@ def test_cell_means_add_a_24th_of_the_second_differences():
     means = cell_means(x**2, inside, [0])
     np.testing.assert_allclose(means[1:4], x[1:4] ** 2 + 1 / 12)
     assert means[0] == 0.0 and means[4] == 16.0 and means[5] == 0.0
+
+
+def test_planes_is_the_grid_method_where_the_mechanism_counts_by_planes_and_the_rule_is_checked():
+    """``method="planes"`` forces one plane per cell: the grid method itself, bit for bit, for a
+    mechanism whose ``cell_rule`` is ``"planes"`` (the Delta); a class declaring an unknown rule
+    is refused when it is defined."""
+    from kinematics.base import Mechanism
+
+    delta = get_mechanism("delta", **PAPER_DESIGNS["delta"])
+    grid, planes = (evaluate(delta, resolution=14, method=m, error_estimate=False) for m in ("grid", "planes"))
+    assert (grid.volume, grid.gdi) == (planes.volume, planes.gdi)
+    with pytest.raises(TypeError, match="cell_rule must be one of .*'planes', 'margins'.*; got 'corners'"):
+        type("Corners", (Mechanism,), {"cell_rule": "corners"})

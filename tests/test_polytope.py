@@ -110,3 +110,30 @@ def test_shapes_are_checked() -> None:
         clipped_cell(np.zeros((3, 2)), np.zeros((3, 1, 2)))
     with pytest.raises(ValueError, match="allowed 1, 2 or 3"):
         clipped_cell(np.zeros((3, 2)), np.zeros((3, 2, 4)))
+
+
+@pytest.mark.parametrize("d", [1, 2, 3])
+def test_one_cutting_margin_in_closed_form_agrees_with_the_clipper(d: int) -> None:
+    """A cell cut by one margin takes the closed form (``kinematics.polytope._one_plane``); the
+    same margin given twice goes through the clipper (which takes vertices on a plane as inside:
+    before, the second clip made up crossings from their rounding and lost up to 6 % of a cell).
+    Fractions and centroids agree, for nodes on either side of the plane, slopes down to 1.2e-3 of
+    the largest (the closed form's limit, ``ONE_PLANE_RATIO``) and below it (the clipper in
+    both), and with a second margin that misses the cell."""
+    rng = np.random.default_rng(10 + d)
+    n = 400
+    gradient = rng.uniform(0.2, 3.0, (n, 1, d)) * rng.choice([-1.0, 1.0], (n, 1, d))
+    largest = np.abs(gradient[:, 0, :]).max(axis=1)
+    gradient[: n // 4, 0, 0] = np.sign(gradient[: n // 4, 0, 0]) * 1.2e-3 * largest[: n // 4]
+    gradient[n // 4 : n // 2, 0, 0] *= 1e-5
+    level = rng.uniform(-0.999, 0.999, (n, 1)) * np.abs(gradient).sum(axis=2) / 2
+    one, one_centroid = clipped_cell(level, gradient)
+    # a second margin that misses the cell: still one cutting margin, the closed form
+    missing = np.concatenate([level, np.full((n, 1), 10.0)], axis=1)
+    with_miss = clipped_cell(missing, np.concatenate([gradient, np.ones((n, 1, d))], axis=1))
+    twice, twice_centroid = clipped_cell(np.repeat(level, 2, axis=1), np.repeat(gradient, 2, axis=1))
+    np.testing.assert_allclose(one, twice, atol=1e-11)
+    np.testing.assert_allclose(one[:, None] * one_centroid, twice[:, None] * twice_centroid, atol=1e-9)
+    np.testing.assert_array_equal(with_miss[0], one)
+    np.testing.assert_array_equal(with_miss[1], one_centroid)
+    assert one.min() < 0.05 and one.max() > 0.95
