@@ -117,8 +117,10 @@ is `docs/figures/accuracy_convergence.png`.
    factor for that axis where it sets one (`grid_axis_nodes`; H4: 1/2 along theta, where its
    margins and `1/kappa` vary slowly; H4's z still integrated exactly per column). The default
    resolution is the mechanism's node budget `grid_nodes` where it sets one (H4 30 x 30 x 15,
-   Tricept 28^3, Delta 26^3), else `default_nodes` (Gough-Stewart 32^3). A node without a boundary crossing on its edges counts its whole cell
-   (inside) or nothing (outside).
+   Tricept 18^3, Delta 26^3), else `default_nodes` (Gough-Stewart 32^3). A node without a
+   boundary crossing on its edges counts its whole cell (inside) or nothing (outside); the
+   Tricept's cell rule (the end of step 6) widens that to the nodes whose 26 neighbours share
+   its membership.
 3. **Crossings on the margins.** Every built-in mechanism states its reachability margins
    (`Mechanism.constraint_margins`; H4 per (x, y, theta) column, `exact_axis_margins`): smooth
    functions of the pose, >= 0 exactly where an actuator range, a joint limit or the reality of
@@ -183,6 +185,31 @@ is `docs/figures/accuracy_convergence.png`.
    along a far crossing's axis being a poor slope).
 6. **Bookkeeping is sparse.** The sums are the plain node sums plus, over the nodes next to a
    crossing only, (cut-cell value - plain value), summed compiled.
+
+   **Linear margins, the Tricept's cell rule** (`Tricept.cell_rule = "margins"`,
+   `kinematics/margin_cells.py`; `method="margins"` on any mechanism with margins and no exact
+   axis, `method="planes"` one plane per cell on any). Steps 3-6 are replaced along the
+   boundary: every node whose 26 neighbours share its membership counts its cell whole or not at
+   all; every other node (the band) counts the exact part of its cell where each reachability
+   margin and the dexterity margin, **each linear over the cell**, holds: from its value at the
+   node and its central differences to the neighbouring nodes (every node's margins are computed
+   with the fine pass), the margin that vanishes first along a cut edge taking the secant through
+   its zero there. That zero is placed as in step 3 (a) and (b), from the two nodes' margins and
+   one look between them (the margins and `1/kappa` there; no membership test, no second look:
+   the rule needs the crossing's margin, not the integrands there). The part is a convex
+   polytope, its volume and centroid exact (`kinematics.polytope.clipped_cell`: the cube clipped
+   by each margin's plane, in closed form where one margin cuts the cell, as in step 4), so an
+   edge where two constraint surfaces meet, a corner and a slab thinner than a cell keep their
+   shape, which one plane per cell cannot (the thin-feature limit below). 1/kappa of a band
+   cell's part at its centroid from the linear dexterity margin (`sqrt(m + limit^2)`); of a whole
+   cell the node's value plus 1/24 of its second differences along the sampled axes whose two
+   neighbours are inside (the cell mean of a parabola). Why the Tricept: at 18^3 nodes it is
+   within 0.1 % on every design of the ladder and the scan (at most 0.095 %, the GDI at a
+   max-volume optimum; 12 further random designs, seed 8: at most 0.083 %), where one plane per
+   cell needed 28^3 and still missed a scan design (0.120 %), at about two thirds of the cost one
+   plane per cell at 28^3 had (the tables below); it has no step where a slab empties (Continuity). Why not the
+   Delta and the Gough-Stewart yet: the table "The linear-margins rule" below (the Delta's GDI
+   misses, its boundary costlier than its nodes save).
 7. **Planar mechanisms: exact sections** (`RPR3.exact_sections`, `RPR2.exact_sections`, one
    kernel for both: `kinematics.annuli.annuli_x_sections`). The 3-RPR's workspace at (y, phi)
    is, along x, the intersection of three annuli (seed 003 eq. 12-14): at most four intervals,
@@ -288,22 +315,28 @@ cells' 1/kappa: with every boundary part's 1/kappa and membership exact (Monte C
 second differences inside, the Delta's GDI errs by +0.007 % on scan 5 at 18 per axis, with the
 centroid's 1/kappa by +0.46 % (1/kappa falls like a root towards a singular boundary, and the
 square of the linear model overshoots there; a look at the centroid does no better, +0.42 %).
-It is built as `evaluate(method="margins")` (opt-in; `kinematics/margin_cells.py`; the table
-"The opt-in rule" below measures it, cost included), with no step along any of the Tricept's
-design variables through its optimum at 20 per axis (b included, where the grid method steps).
-Not yet a default: at 20 per axis the Tricept costs about as much as today's default (its
-boundary work, the grid method's three looks per cut edge plus the margins near the boundary,
-outweighs the nodes saved), the Delta's GDI misses, the H4's exact axis is not supported, and a
-default changed needs a regeneration. Next: looks at the crossings that compute the margins only
-(the dexterity where its margin binds), and the boundary cells' 1/kappa integrated over the part.
+It is built (`kinematics/margin_cells.py`, the end of step 6) and is the **Tricept's cell rule**
+at 18 per axis: its crossings from the nodes' margins and one look per cut edge (margins and
+`1/kappa` only), every node's margins with the fine pass, a closed form where one margin cuts a
+cell, which brought its cost at 20 per axis from 2.8x the old default (with the grid method's
+crossings: three looks per cut edge, a membership test and the margins at each crossing again) to
+about 2x, and 18 per axis (within 0.1 % on the same designs) to about 1.6x. Not
+yet the Delta's or the Gough-Stewart's (the table "The linear-margins rule" below): the Delta's
+GDI misses at fewer nodes than its default and its boundary costs more than its nodes save; the
+Gough-Stewart at 22 per axis costs little more than its old default but its GDI misses on two
+designs (-0.15 %, an under-count, not the Delta's overshoot; not yet located). The H4's exact
+axis is not supported. Next: the boundary cells' 1/kappa integrated over the part rather than
+taken at its centroid.
 The
 planar mechanisms' sections converge like h^1.5 across (y, phi) (where a section shrinks to
 nothing, its length falls like a square root), irregularly (the 2-RPR's reachable sections
 against `RPR2.exact_area` on its paper design: +0.045 %, -0.020 %, +0.026 % at 200, 400, 800,
 which the closed-form volume takes out of its V).
 
-**Independent references.** The reference of each design below is the same method at
-4x the finer of the two defaults (cross-checked against the old method there). Where the exact value is
+**Independent references.** The reference of each design below is the grid method at
+4x the finer of the two defaults (cross-checked against the old method there), with one plane
+per cell whatever the mechanism's cell rule (`benchmarks.accuracy.reference_method`: the
+Tricept's linear margins are checked against the other rule, not against themselves). Where the exact value is
 known independently of any grid, the tests hold the default to it: the 2-RPR's reachable area
 (`RPR2.exact_area`, two annuli in closed form) against the sum of its sections before the
 closed form replaces it (six random designs within 0.1 %; the old count errs by up to 0.27 % on
@@ -328,14 +361,17 @@ by about 1e-6 per point on one side and falls by 4-7e-6 on the other, with no st
 one variable each (along H4's line through the regenerated best known it steps by 32 ppm of eta
 against a median of 4; through the earlier one its changes were all irregular). The objective of the previous version failed it for H4 (a spike of
 2e-5 of eta at the h4_mixed best known, where a crossing's look fell just outside, step 3c)
-and for the Tricept along b (3e-5 of eta, a corner cut lost in one step, step 4). Along the old
+and for the Tricept along b (3e-5 of eta, a corner cut lost in one step, step 4; faded since). Along the old
 h4_mixed best known's line the largest change between neighbours is now 2.3x the median (it was
 246x); `test_no_spike_where_a_crossing_s_look_falls_just_outside` walks it at a tenth of the
-step. **One step remains** (a strict xfail, `tricept-b`): 0.4 % of b above its lower bound a
-node inside a slab 0.73 cells wide leaves it through the slab's far side; the edge to its
-outside neighbour stops being cut, and the crossing on it, 0.27 cells from that neighbour, is
-lost with 0.23 of its cell (1.8e-5 of eta). It is the thin-feature limit below: one crossing
-per node and axis cannot hold a slab thinner than a cell once no node lies inside it.
+step. The last step, along the Tricept's b with one plane per cell, went with its linear margins:
+0.4 % of b above its lower bound a node inside a slab 0.73 cells wide leaves it through the
+slab's far side; the edge to its outside neighbour stops being cut, and the crossing on it, 0.27
+cells from that neighbour, was lost with 0.23 of its cell (1.8e-5 of eta): one crossing per node
+and axis cannot hold a slab thinner than a cell once no node lies inside it (the thin-feature
+limit above). The linear margins keep both faces of the slab in the band's cells, and the walk
+along b has no step (`test_one_plane_per_cell_steps_where_a_slab_empties` keeps the planes' step
+as the evidence that the test can fail there).
 
 **Error bars** (part 2). `Evaluation.volume_error` and `gdi_error` (with `error_estimate=True`,
 the default of `evaluate`) are the change against the same method at half the resolution
@@ -529,9 +565,10 @@ def scan(name: str) -> dict:
     }
 
 
-#: the opt-in rule ``evaluate(method="margins")`` (kinematics.margin_cells, not a default yet):
-#: its resolutions per mechanism, the grid method's default (None) and about a third of its nodes
-MARGIN_RESOLUTIONS = {"delta": (None, 21, 18), "gough_stewart": (None, 22), "tricept": (None, 20)}
+#: ``evaluate(method="margins")`` (kinematics.margin_cells) where it is not the mechanism's cell rule
+#: (the Tricept's ladder and scan measure it there): its resolutions per mechanism, the grid
+#: method's default (None) and about a third of its nodes
+MARGIN_RESOLUTIONS = {"delta": (None, 21, 18), "gough_stewart": (None, 22)}
 
 
 def margins_study(r: dict) -> list[dict]:
@@ -586,7 +623,13 @@ def margins_table(results: list[dict]) -> str:
 
 
 #: the new method's phases, by the functions of kinematics.workspace that run them
-PHASES = {"_integrate_grid": "total", "_occupied_box": "coarse", "_boundary_corrected_sums": "boundary"}
+PHASES = {
+    "_integrate_grid": "total",
+    "_occupied_box": "coarse",
+    "_boundary_corrected_sums": "boundary",
+    "_margin_secants": "boundary",
+    "margin_cell_sums": "boundary",
+}
 
 
 def phases(name: str) -> dict[str, float] | None:
@@ -606,7 +649,7 @@ def phases(name: str) -> dict[str, float] | None:
         profile.disable()
         spent = dict.fromkeys(PHASES.values(), 0.0)
         for (path, _, function), (_, _, _, cumulative, _) in pstats.Stats(profile).stats.items():
-            if function in PHASES and path.endswith("workspace.py"):
+            if function in PHASES and path.endswith(("workspace.py", "margin_cells.py")):
                 spent[PHASES[function]] += cumulative
         if spent["total"] > 0 and (best is None or spent["total"] < best["total"]):
             best = spent
@@ -809,8 +852,8 @@ def main() -> None:
         + scan_table(results)
         + "\n\n"
         + scan_calibration(results)
-        + '\n\nThe opt-in rule `evaluate(method="margins")` (linear margins, `kinematics.margin_cells`; not '
-        "a default yet, see \"Order\"), on the ladder's and the scan's designs against the same references, "
+        + '\n\nThe linear-margins rule `evaluate(method="margins")` (`kinematics.margin_cells`) where it is '
+        "not the mechanism's cell rule (the Tricept's is, see \"Order\"), on the ladder's and the scan's designs against the same references, "
         "at the grid method's default resolution and at about a third of its nodes; its cost on the paper "
         "design against the old default, timed alternately as the ladder:\n\n"
         + margins_table(results)

@@ -1,4 +1,6 @@
-"""The "linear margins" cell rule of ``evaluate(method="margins")`` (docs/accuracy.md, "Order").
+"""The "linear margins" cell rule: the grid method's rule for a mechanism whose ``cell_rule`` is
+``"margins"`` (the Tricept), and ``evaluate(method="margins")`` for any mechanism with margins
+(docs/accuracy.md, "Order").
 
 Every grid node whose 26 neighbours share its membership counts its cell whole (inside) or not
 at all. Every other node, the **band** along the boundary (the cut cells and the uncut cells
@@ -10,11 +12,12 @@ linear over the cell:
   solution), extrapolated from the first neighbour along a sampled axis that defines it;
 - its change per cell width along each sampled axis, the central difference of the nodes'
   values (one-sided where a neighbour is undefined);
-- along an axis with an edge crossing (:func:`kinematics.workspace._sparse_crossings`, the
-  grid method's crossings), the margin nearest 0 at the crossing takes the secant through it
-  (the reachability margins evaluated there, the dexterity margin from the crossing's 1/kappa).
-  Why the secants: the margins curve (an arccos near the reach limit), and from the nodes'
-  values alone V erred by up to 0.34 % (Delta, defaults) against 0.05 % with them.
+- along an axis whose grid edge from the node crosses the boundary
+  (:func:`kinematics.workspace._margin_secants`: the first margin to vanish along the edge, placed
+  on the parabola through its values at the two nodes and at one look between them), that
+  margin takes the secant through its zero there. Why the secants: the margins curve (an arccos
+  near the reach limit), and from the nodes' values alone V erred by up to 0.34 % (Delta,
+  defaults) against 0.05 % with them.
 
 The part is the intersection of the half-spaces, a convex polytope, whose volume and centroid
 :func:`kinematics.polytope.clipped_cell` computes exactly: an edge where two constraint
@@ -27,7 +30,7 @@ a root towards a singular boundary, where the node's value alone, the midpoint r
 +0.085 % of the Delta's GDI on a scan design with every boundary part exact).
 
 Mechanisms with margins (``Mechanism.constraint_margins``) and no exact axis only: the H4,
-whose grid integrates z exactly per column, keeps ``method="grid"``. Units: margins in their
+whose grid integrates z exactly per column, keeps one plane per cell. Units: margins in their
 own units, positions in the pose's (mm, cm or rad), cell offsets in cell widths.
 """
 

@@ -33,9 +33,14 @@ crossing along each axis and the fraction and centroid of the cut cell follow
 in closed form; the integrand of a cut cell is taken at that centroid. Exact
 for a planar boundary and second order for a smooth one, and continuous in the
 design (no step when the boundary crosses a node); it costs more than the plain
-count at each mechanism's default (the ratios: docs/accuracy.md). Its default resolution
+count at each mechanism's default (the ratios: docs/accuracy.md). That is the cell rule
+``"planes"``; a mechanism whose :attr:`~kinematics.base.Mechanism.cell_rule` is ``"margins"``
+(the Tricept) counts the cells along the boundary under its margins, each linear over the
+cell, instead (:mod:`kinematics.margin_cells`, crossings by :func:`_margin_secants`), which
+holds a corner and a slab thinner than a cell; ``method="planes"`` and ``method="margins"``
+force either rule. Its default resolution
 is the mechanism's ``grid_nodes`` budget where set (H4 30 x 30 x 15, half the nodes
-along theta: ``grid_axis_nodes``; Tricept 28^3, Delta 26^3), else ``default_nodes``. ``method="midpoint"``: the plain
+along theta: ``grid_axis_nodes``; Tricept 18^3, Delta 26^3), else ``default_nodes``. ``method="midpoint"``: the plain
 cell-centre count on a regular grid of ``default_nodes`` (first order; it moves
 in steps as the boundary crosses cell centres), the objective of earlier
 versions, kept for comparison. Where a mechanism has an axis along which nothing
@@ -2324,7 +2329,7 @@ def evaluate(
         Grid points per sampled axis (larger is finer; doubling it refines
         every axis). Default :func:`default_resolution`: for ``method="grid"`` the node budget
         :attr:`~kinematics.base.Mechanism.grid_nodes` spread over the sampled axes where set
-        (H4 30, with 15 along theta; Tricept 28, Delta 26), else :attr:`~kinematics.base.Mechanism.default_nodes`
+        (H4 30, with 15 along theta; Tricept 20, Delta 26), else :attr:`~kinematics.base.Mechanism.default_nodes`
         (H4 24, Tricept 32, 3-RPR 32 over (x, y, phi) or 181 at constant phi, 2-RPR 400), which
         ``method="midpoint"`` always takes.
     orientation : (float, float), optional
