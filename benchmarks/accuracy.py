@@ -117,7 +117,7 @@ is `docs/figures/accuracy_convergence.png`.
    factor for that axis where it sets one (`grid_axis_nodes`; H4: 1/2 along theta, where its
    margins and `1/kappa` vary slowly; H4's z still integrated exactly per column). The default
    resolution is the mechanism's node budget `grid_nodes` where it sets one (H4 30 x 30 x 15,
-   Tricept 18^3, Delta 26^3), else `default_nodes` (Gough-Stewart 32^3). A node without a
+   Tricept 20^3, Delta 26^3), else `default_nodes` (Gough-Stewart 32^3). A node without a
    boundary crossing on its edges counts its whole cell (inside) or nothing (outside); the
    Tricept's cell rule (the end of step 6) widens that to the nodes whose 26 neighbours share
    its membership.
@@ -203,11 +203,16 @@ is `docs/figures/accuracy_convergence.png`.
    shape, which one plane per cell cannot (the thin-feature limit below). 1/kappa of a band
    cell's part at its centroid from the linear dexterity margin (`sqrt(m + limit^2)`); of a whole
    cell the node's value plus 1/24 of its second differences along the sampled axes whose two
-   neighbours are inside (the cell mean of a parabola). Why the Tricept: at 18^3 nodes it is
-   within 0.1 % on every design of the ladder and the scan (at most 0.095 %, the GDI at a
-   max-volume optimum; 12 further random designs, seed 8: at most 0.083 %), where one plane per
-   cell needed 28^3 and still missed a scan design (0.120 %), at about two thirds of the cost one
-   plane per cell at 28^3 had (the tables below); it has no step where a slab empties (Continuity). Why not the
+   neighbours are inside (the cell mean of a parabola); where neither a band node nor its face
+   neighbours know the dexterity margin (a corner of the workspace reaching into an unreachable
+   node's cell), the nearest of its 26 neighbours that does lends its linear model (that part's
+   1/kappa was 0 before: the GDI under-counted by the share of V in such parts, 0.2 % on the
+   Gough-Stewart at 22 per axis, 0.05 % on the Tricept). Why the Tricept: at 20^3 nodes it is
+   within 0.1 % on every design of the ladder and the scan (at most 0.087 %, the GDI of a scan
+   design; 12 further random designs, seed 8: at most 0.081 %), where one plane per cell needed
+   28^3 and still missed a scan design (0.120 %), at about the cost one plane per cell had at
+   28^3 (the tables below); at 19^3 and 18^3 its GDI misses on 7 and 5 of the 16 designs (up to
+   0.115 % and 0.120 %); it has no step where a slab empties (Continuity). Why not the
    Delta and the Gough-Stewart yet: the table "The linear-margins rule" below (the Delta's GDI
    misses, its boundary costlier than its nodes save).
 7. **Planar mechanisms: exact sections** (`RPR3.exact_sections`, `RPR2.exact_sections`, one
@@ -316,17 +321,20 @@ second differences inside, the Delta's GDI errs by +0.007 % on scan 5 at 18 per 
 centroid's 1/kappa by +0.46 % (1/kappa falls like a root towards a singular boundary, and the
 square of the linear model overshoots there; a look at the centroid does no better, +0.42 %).
 It is built (`kinematics/margin_cells.py`, the end of step 6) and is the **Tricept's cell rule**
-at 18 per axis: its crossings from the nodes' margins and one look per cut edge (margins and
+at 20 per axis: its crossings from the nodes' margins and one look per cut edge (margins and
 `1/kappa` only), every node's margins with the fine pass, a closed form where one margin cuts a
-cell, which brought its cost at 20 per axis from 2.8x the old default (with the grid method's
-crossings: three looks per cut edge, a membership test and the margins at each crossing again) to
-about 2x, and 18 per axis (within 0.1 % on the same designs) to about 1.6x. Not
+cell, which brought its cost from 2.8x the old default (with the grid method's crossings: three
+looks per cut edge, a membership test and the margins at each crossing again) to about 2x. The
+GDI's remaining bias is positive (the Tricept's +0.03 to +0.09 %): 1/kappa of a band cell's part
+is the square root of the linear model at the part's centroid, above its mean over the part
+(1/kappa is concave there); with the part's exact mean of the same model (Monte Carlo, measured
+after the fact) the Tricept at 18 per axis is within 0.085 % (0.120 % at the centroid). Not
 yet the Delta's or the Gough-Stewart's (the table "The linear-margins rule" below): the Delta's
 GDI misses at fewer nodes than its default and its boundary costs more than its nodes save; the
-Gough-Stewart at 22 per axis costs little more than its old default but its GDI misses on two
-designs (-0.15 %, an under-count, not the Delta's overshoot; not yet located). The H4's exact
-axis is not supported. Next: the boundary cells' 1/kappa integrated over the part rather than
-taken at its centroid.
+Gough-Stewart at 22 per axis costs little more than its old default but its V misses on three
+designs (up to 0.13 %; its GDI's misses there, -0.15 %, were the parts without a dexterity model,
+now lent one: 0.04 %). The H4's exact axis is not supported. Next: the boundary cells' 1/kappa
+integrated over the part rather than taken at its centroid.
 The
 planar mechanisms' sections converge like h^1.5 across (y, phi) (where a section shrinks to
 nothing, its length falls like a square root), irregularly (the 2-RPR's reachable sections

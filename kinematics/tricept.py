@@ -173,12 +173,13 @@ class Tricept(Mechanism):
         FixedParameter("homogenising", "arm", choices=("arm", "a", "d", "none")),
     )
     default_nodes = 32**3
-    # linear margins at 18^3 nodes: V, GDI and eta within 0.1 % on the ladder's and the scan's designs
-    # of docs/accuracy.md (at most 0.095 %, the GDI at a max-volume optimum; 0.069 % at 20^3, which
-    # cost about 2x the old default, 18^3 about 1.6x); one plane per cell needed 28^3 and missed a
-    # scan design. Continuous where a slab thinner than a cell empties (the planes stepped along b)
+    # linear margins at 20^3 nodes: V, GDI and eta within 0.1 % on the ladder's and the scan's designs
+    # of docs/accuracy.md and 12 more random ones (at most 0.087 %, the GDI of a scan design; at 19^3
+    # and 18^3 the GDI misses on 7 and 5 of the 16: 0.115 %, 0.120 %); one plane per cell needed
+    # 28^3 and missed a scan design. Continuous where a slab thinner than a cell empties (the
+    # planes stepped there, along b)
     cell_rule = "margins"
-    grid_nodes = 18**3
+    grid_nodes = 20**3
     min_resolution = 16
 
     design_variables = (

@@ -40,7 +40,7 @@ cell, instead (:mod:`kinematics.margin_cells`, crossings by :func:`_margin_secan
 holds a corner and a slab thinner than a cell; ``method="planes"`` and ``method="margins"``
 force either rule. Its default resolution
 is the mechanism's ``grid_nodes`` budget where set (H4 30 x 30 x 15, half the nodes
-along theta: ``grid_axis_nodes``; Tricept 18^3, Delta 26^3), else ``default_nodes``. ``method="midpoint"``: the plain
+along theta: ``grid_axis_nodes``; Tricept 20^3, Delta 26^3), else ``default_nodes``. ``method="midpoint"``: the plain
 cell-centre count on a regular grid of ``default_nodes`` (first order; it moves
 in steps as the boundary crosses cell centres), the objective of earlier
 versions, kept for comparison. Where a mechanism has an axis along which nothing

@@ -413,9 +413,9 @@ def test_multisection_finds_the_outermost_crossing_to_its_resolution():
 
 def test_grid_method_has_its_own_node_budget():
     tricept = get_mechanism("tricept", **PAPER_DESIGNS["tricept"])
-    assert default_resolution(tricept, method="midpoint") == 32 and default_resolution(tricept) == 18
+    assert default_resolution(tricept, method="midpoint") == 32 and default_resolution(tricept) == 20
     assert evaluate(tricept, error_estimate=False).method == "grid"  # the default
-    assert evaluate(tricept, error_estimate=False).resolution == 18
+    assert evaluate(tricept, error_estimate=False).resolution == 20
     rpr3 = get_mechanism("rpr3", **PAPER_DESIGNS["rpr3"])  # no grid budget: the default one
     assert default_resolution(rpr3) == default_resolution(rpr3, method="midpoint") == 32
 
