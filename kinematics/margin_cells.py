@@ -226,28 +226,56 @@ def _borrow_dexterity(
     of the GDI by the share of V in these parts (0.2 % of the Gough-Stewart's at 22 per axis,
     0.05 % of the Tricept's), where the rule's cells elsewhere over-count it a little."""
     missing = np.nonzero(~np.isfinite(at[:, -1]))[0]
-    if not missing.size:
-        return
-    known_at, known_slope = at[:, -1].copy(), slope[:, -1, :].copy()
-    index = np.array(np.unravel_index(nodes[missing], shape))
-    size = np.array(shape)[:, None]
-    done = np.zeros(missing.size, dtype=bool)
-    for offset in _neighbour_offsets(len(sampled)):
-        there = index.copy()
-        there[sampled] += offset[:, None]
-        on = np.all((there >= 0) & (there < size), axis=0)
-        rows = row_of[np.ravel_multi_index(np.clip(there, 0, size - 1), shape)]
-        take = np.nonzero(on & (rows >= 0) & ~done)[0]
-        take = take[np.isfinite(known_at[rows[take]])]
-        if not take.size:
-            continue
-        source = rows[take]
-        # the neighbour's model at the node, which lies at -offset from it (cell widths)
-        at[missing[take], -1] = known_at[source] - known_slope[source] @ offset.astype(float)
-        slope[missing[take], -1, :] = known_slope[source]
-        done[take] = True
-        if done.all():
-            return
+    if missing.size:
+        _borrowed_dexterity(
+            at,
+            slope,
+            row_of,
+            np.ascontiguousarray(nodes[missing]),
+            missing,
+            np.asarray(shape, dtype=np.int64),
+            np.asarray(sampled, dtype=np.int64),
+            _neighbour_offsets(len(sampled)),
+        )
+
+
+@kernels.jit
+def _borrowed_dexterity(at, slope, row_of, missing_nodes, missing, shape, sampled, offsets):
+    """:func:`_borrow_dexterity`'s loop, compiled: per missing row the offsets in order, the
+    first neighbour (a row of ``at``) whose dexterity margin was known before any borrowing."""
+    known = np.isfinite(at[:, -1])
+    c = at.shape[1] - 1
+    d = sampled.shape[0]
+    strides = np.empty(shape.shape[0], dtype=np.int64)
+    stride = 1
+    for j in range(shape.shape[0] - 1, -1, -1):
+        strides[j] = stride
+        stride *= shape[j]
+    for i in range(missing.shape[0]):
+        node = missing_nodes[i]
+        for o in range(offsets.shape[0]):
+            there = node
+            inside_grid = True
+            for k in range(d):
+                j = sampled[k]
+                coordinate = (node // strides[j]) % shape[j] + offsets[o, k]
+                if coordinate < 0 or coordinate >= shape[j]:
+                    inside_grid = False
+                    break
+                there += offsets[o, k] * strides[j]
+            if not inside_grid:
+                continue
+            source = row_of[there]
+            if source < 0 or not known[source]:
+                continue
+            # the neighbour's model at the node, which lies at -offset from it (cell widths)
+            value = at[source, c]
+            for k in range(d):
+                value -= slope[source, c, k] * offsets[o, k]
+            at[missing[i], c] = value
+            for k in range(d):
+                slope[missing[i], c, k] = slope[source, c, k]
+            break
 
 
 def _secants(
