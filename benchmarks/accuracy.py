@@ -117,7 +117,7 @@ is `docs/figures/accuracy_convergence.png`.
    factor for that axis where it sets one (`grid_axis_nodes`; H4: 1/2 along theta, where its
    margins and `1/kappa` vary slowly; H4's z still integrated exactly per column). The default
    resolution is the mechanism's node budget `grid_nodes` where it sets one (H4 30 x 30 x 15,
-   Tricept 20^3, Delta 26^3), else `default_nodes` (Gough-Stewart 32^3). A node without a
+   Tricept 20^3, Delta 26^3, Gough-Stewart 26^3), else `default_nodes`. A node without a
    boundary crossing on its edges counts its whole cell (inside) or nothing (outside); the
    Tricept's cell rule (the end of step 6) widens that to the nodes whose 26 neighbours share
    its membership.
@@ -186,7 +186,7 @@ is `docs/figures/accuracy_convergence.png`.
 6. **Bookkeeping is sparse.** The sums are the plain node sums plus, over the nodes next to a
    crossing only, (cut-cell value - plain value), summed compiled.
 
-   **Linear margins, the Tricept's cell rule** (`Tricept.cell_rule = "margins"`,
+   **Linear margins, the Tricept's and the Gough-Stewart's cell rule** (`cell_rule = "margins"`,
    `kinematics/margin_cells.py`; `method="margins"` on any mechanism with margins and no exact
    axis, `method="planes"` one plane per cell on any). Steps 3-6 are replaced along the
    boundary: every node whose 26 neighbours share its membership counts its cell whole or not at
@@ -212,9 +212,13 @@ is `docs/figures/accuracy_convergence.png`.
    design; 12 further random designs, seed 8: at most 0.081 %), where one plane per cell needed
    28^3 and still missed a scan design (0.120 %), at about the cost one plane per cell had at
    28^3 (the tables below); at 19^3 and 18^3 its GDI misses on 7 and 5 of the 16 designs (up to
-   0.115 % and 0.120 %); it has no step where a slab empties (Continuity). Why not the
-   Delta and the Gough-Stewart yet: the table "The linear-margins rule" below (the Delta's GDI
-   misses, its boundary costlier than its nodes save).
+   0.115 % and 0.120 %); it has no step where a slab empties (Continuity). Why the
+   Gough-Stewart (its constant-orientation grid; a 6-D grid keeps one plane per cell): at 26^3
+   nodes it is within 0.1 % on the 13 designs (at most 0.083 %) at about 1.8x the old default's
+   cost, where one plane per cell at 32^3 cost about 2.6x and fewer nodes did not hold (below);
+   at 22^3 and 24^3 its V misses on 3 and 2 designs (0.130 %, 0.113 %). Why not the Delta yet:
+   the table "The linear-margins rule" below (its GDI misses, its boundary costlier than its
+   nodes save).
 7. **Planar mechanisms: exact sections** (`RPR3.exact_sections`, `RPR2.exact_sections`, one
    kernel for both: `kinematics.annuli.annuli_x_sections`). The 3-RPR's workspace at (y, phi)
    is, along x, the intersection of three annuli (seed 003 eq. 12-14): at most four intervals,
@@ -328,13 +332,12 @@ looks per cut edge, a membership test and the margins at each crossing again) to
 GDI's remaining bias is positive (the Tricept's +0.03 to +0.09 %): 1/kappa of a band cell's part
 is the square root of the linear model at the part's centroid, above its mean over the part
 (1/kappa is concave there); with the part's exact mean of the same model (Monte Carlo, measured
-after the fact) the Tricept at 18 per axis is within 0.085 % (0.120 % at the centroid). Not
-yet the Delta's or the Gough-Stewart's (the table "The linear-margins rule" below): the Delta's
-GDI misses at fewer nodes than its default and its boundary costs more than its nodes save; the
-Gough-Stewart at 22 per axis costs little more than its old default but its V misses on three
-designs (up to 0.13 %; its GDI's misses there, -0.15 %, were the parts without a dexterity model,
-now lent one: 0.04 %). The H4's exact axis is not supported. Next: the boundary cells' 1/kappa
-integrated over the part rather than taken at its centroid.
+after the fact) the Tricept at 18 per axis is within 0.085 % (0.120 % at the centroid). It is
+the Gough-Stewart's cell rule too, at 26 per axis (its GDI's misses at 22, -0.15 %, were the
+parts without a dexterity model, now lent one: 0.04 %). Not yet the Delta's (the table "The
+linear-margins rule" below): its GDI misses at fewer nodes than its default and its boundary
+costs more than its nodes save. The H4's exact axis is not supported. Next: the boundary cells'
+1/kappa integrated over the part rather than taken at its centroid.
 The
 planar mechanisms' sections converge like h^1.5 across (y, phi) (where a section shrinks to
 nothing, its length falls like a square root), irregularly (the 2-RPR's reachable sections
@@ -398,12 +401,12 @@ side). Where the cost goes is measured phase by phase in the table "Where the ne
 time goes": the fine pass alone (the grid's nodes, nothing else) is the floor of the method at
 its node budget. The table compares the room it leaves under 2x with what the coarse pass and
 the boundary cost now: where the room is a fraction of that (H4: 30 x 30 x 15 columns of a compiled z
-interval against the old 24^3; Gough-Stewart: the occupied box puts about twice as many
-reachable nodes, each a 6 x 6 SVD, into the workspace as the old grid over the whole box), 2x
-needs a rule accurate to 0.1 % on fewer nodes rather than a faster boundary. Fewer nodes with
-today's rule do not do: the Gough-Stewart at 26, 28 and 30 nodes per axis instead of 32 (against
-the 4x reference, on the ladder's 3 and the scan's 10 designs) errs by up to 0.138 %, 0.203 % and
-0.194 % of V (scan 3, scan 5, scan 5), against 0.062 % at its default. On top of the fine
+interval against the old 24^3; the Gough-Stewart with one plane per cell: the occupied box put
+about twice as many reachable nodes, each a 6 x 6 SVD, into the workspace as the old grid over
+the whole box), 2x needs a rule accurate to 0.1 % on fewer nodes rather than a faster boundary:
+one plane per cell at 26, 28 and 30 nodes per axis instead of 32 erred on the Gough-Stewart by up
+to 0.138 %, 0.203 % and 0.194 % of V (against the 4x reference, on the ladder's 3 and the scan's
+10 designs), its linear margins at 26 by 0.083 % (its cell rule now). On top of the fine
 pass come the coarse pass (1/8 of the nodes, plus the extreme edges'
 crossings), and the boundary: the margins at three points per cut edge (H4: 28 margins, 4 rods'
 reach, the 12 orderings of the z interval's bounds and its 8 bounds against the box, 4 joint
@@ -576,7 +579,7 @@ def scan(name: str) -> dict:
 #: ``evaluate(method="margins")`` (kinematics.margin_cells) where it is not the mechanism's cell rule
 #: (the Tricept's ladder and scan measure it there): its resolutions per mechanism, the grid
 #: method's default (None) and about a third of its nodes
-MARGIN_RESOLUTIONS = {"delta": (None, 21, 18), "gough_stewart": (None, 22)}
+MARGIN_RESOLUTIONS = {"delta": (None, 21, 18)}
 
 
 def margins_study(r: dict) -> list[dict]:

@@ -293,8 +293,9 @@ class Mechanism(ABC):
     #: how ``method="grid"`` counts the cells along the workspace's boundary: ``"planes"`` (each
     #: cell cut by one plane through its nearest crossings) or ``"margins"`` (each reachability
     #: and the dexterity margin linear over the cell, the part where all hold:
-    #: :mod:`kinematics.margin_cells`; needs :meth:`constraint_margins`, no exact axis and 1 to 3
-    #: sampled axes), chosen per mechanism from the error-cost measurements of docs/accuracy.md
+    #: :mod:`kinematics.margin_cells`; needs :meth:`constraint_margins` and no exact axis; a grid
+    #: of more than 3 sampled axes, or none, keeps one plane per cell), chosen per mechanism from
+    #: the error-cost measurements of docs/accuracy.md
     cell_rule: ClassVar[str] = "planes"
     #: nodes of ``method="grid"`` along a pose variable, as a multiple of ``resolution``, where
     #: not 1 (rounded up): an axis along which the workspace's margins and ``1/kappa`` vary

@@ -299,15 +299,37 @@ def cell_means(integrand: np.ndarray, inside: np.ndarray, sampled: list[int]) ->
     value plus 1/24 of its second difference along each sampled axis whose two neighbours are
     inside (the mean of a parabola over a cell of width 1 is its centre value plus ``f''/24``);
     0 outside."""
-    known = np.where(inside, integrand, np.nan)
-    mean = known.copy()
-    for j in sampled:
-        second = np.full(known.shape, np.nan)
-        middle, ahead, behind = ([slice(None)] * known.ndim for _ in range(3))
-        middle[j], ahead[j], behind[j] = slice(1, -1), slice(2, None), slice(0, -2)
-        second[tuple(middle)] = known[tuple(ahead)] + known[tuple(behind)] - 2.0 * known[tuple(middle)]
-        mean += np.where(np.isfinite(second), second, 0.0) / 24.0
-    return np.where(inside, mean, 0.0)
+    shape = np.asarray(inside.shape, dtype=np.int64)
+    strides = np.asarray([int(np.prod(inside.shape[j + 1 :])) for j in range(inside.ndim)], dtype=np.int64)
+    mean = _cell_means(
+        np.ascontiguousarray(integrand, dtype=float).ravel(),
+        np.ascontiguousarray(inside).ravel(),
+        shape,
+        strides,
+        np.asarray(sampled, dtype=np.int64),
+    )
+    return mean.reshape(inside.shape)
+
+
+@kernels.jit
+def _cell_means(integrand, inside, shape, strides, sampled):
+    """:func:`cell_means` on the flat grid, compiled."""
+    mean = np.zeros(integrand.shape[0])
+    for node in range(integrand.shape[0]):
+        if not inside[node]:
+            continue
+        here = integrand[node]
+        value = here
+        for k in range(sampled.shape[0]):
+            j = sampled[k]
+            coordinate = (node // strides[j]) % shape[j]
+            if coordinate == 0 or coordinate == shape[j] - 1:
+                continue
+            above, below = node + strides[j], node - strides[j]
+            if inside[above] and inside[below]:
+                value += ((integrand[above] + integrand[below]) - 2.0 * here) / 24.0
+        mean[node] = value
+    return mean
 
 
 def margin_cell_sums(

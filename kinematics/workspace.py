@@ -2395,8 +2395,13 @@ def evaluate(
 
     if method == "polar" and fixed:
         raise ValueError("fixed pose variables are not supported with method 'polar'")
-    # the linear-margins cell rule: asked for, or the grid method's rule for this mechanism
-    margins = method == "margins" or (method == "grid" and mechanism.cell_rule == "margins")
+    # the linear-margins cell rule: asked for, or the grid method's rule for this mechanism where
+    # its grid samples 1 to 3 axes (a 6-D orientation workspace keeps one plane per cell)
+    margins = method == "margins" or (
+        method == "grid"
+        and mechanism.cell_rule == "margins"
+        and 1 <= len(sampled_axes(mechanism, orientation, fixed)) <= 3
+    )
     if margins:
         _check_margins_method(mechanism, orientation, fixed)
 

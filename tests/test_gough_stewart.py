@@ -316,8 +316,8 @@ def test_characteristic_length_changes_gdi_only(mech):
 
 def test_default_evaluation_is_the_constant_orientation_workspace(mech):
     ev = evaluate(mech, error_estimate=False)
-    assert ev.resolution == 32 and ev.n_samples == 32**3 and ev.volume_unit == "mm³"
-    co = constant_orientation_workspace(mech, resolution=32, error_estimate=False)
+    assert ev.resolution == 26 and ev.n_samples == 26**3 and ev.volume_unit == "mm³"
+    co = constant_orientation_workspace(mech, resolution=26, error_estimate=False)
     assert co.volume == pytest.approx(ev.volume, rel=1e-12) and co.gdi == pytest.approx(ev.gdi, rel=1e-12)
 
 
