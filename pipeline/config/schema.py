@@ -81,7 +81,9 @@ class EvaluateConfig:
 
     ``method`` (:data:`EVALUATE_METHODS`): ``grid`` counts each cell that the
     workspace boundary cuts with the fraction of it inside (second order and
-    continuous in the design, docs/accuracy.md); ``midpoint`` is the old
+    continuous in the design, docs/accuracy.md; the cell rule is the mechanism's
+    ``cell_rule``: one plane per cell, or linear margins for the Tricept and the
+    Gough-Stewart); ``midpoint`` is the old
     cell-centre count (first order, it moves in steps as the boundary crosses
     a node), kept for comparison. Each method has its own default resolution
     (``grid``: the mechanism's ``grid_nodes`` budget where set).

@@ -112,8 +112,8 @@ COLUMNS: dict[str, tuple[str, str]] = {
     "method": (
         "",
         "workspace integration method of the run's evaluations (evaluate.method): grid (boundary "
-        "fractions, second order) or midpoint (cell-centre count, first order); null in runs made "
-        "before it was recorded (they used midpoint)",
+        "fractions, second order; cells by the mechanism's cell rule, docs/accuracy.md) or midpoint "
+        "(cell-centre count, first order); null in runs made before it was recorded (they used midpoint)",
     ),
     "at_bounds": ("", "design variables on a bound of the design box, as name=lower or name=upper"),
     "optimizer_value": ("objective_unit", "what the configured optimiser found, before polish"),
