@@ -262,8 +262,9 @@ between neighbouring resolutions, while its crossings agree with 20 bisections e
 within 0.1 % on the ladder's designs is therefore not a guarantee on every design: the scan of
 further random designs below measures how far it holds. (Its other miss was a 3-RPR sliver, a
 workspace that is a tiny part of the reference volume, see the V / V* column. Rows over each
-layer's extent, item 7, resolve it now.) The fix is a cell rule that keeps every crossing of a cell (e.g. the cell
-between eight nodes split into tetrahedra, each cut by its own plane), not yet built. Tried and
+layer's extent, item 7, resolve it now.) The fix is a cell rule that keeps every boundary of a
+cell: linear margins (below; the Tricept's and the Gough-Stewart's rule now, not yet the Delta's).
+Tried and
 not adopted: a far strip per axis (a node with crossings on both sides of an axis, the farther
 within its cell, took off, or for an outside node added, the part of its cell beyond the farther
 crossing, its face normal to the axis). On the scan below it took the worst V from 0.185 % to
@@ -315,8 +316,8 @@ at its centroid from the linear dexterity margin, of a whole cell the node's val
 its second differences; no Monte Carlo), against the 4x reference on the 10 scan designs, max
 |error| V / GDI: at the defaults Delta 0.053 / 0.160 % (the code: 0.185 / 0.068 %), Tricept
 0.030 / 0.013 % (0.120 / 0.029 %), Gough-Stewart 0.043 / 0.060 % (0.048 / 0.019 %); with fewer
-nodes the Tricept at 20 per axis 0.067 / 0.069 % (none of the 10 over 0.1 %; the grid rule at 20
-costs about half its default), the Delta at 21 0.118 / 0.228 % (5 over), the Gough-Stewart at 22
+nodes the Tricept at 20 per axis 0.067 / 0.069 % (none of the 10 over 0.1 %; one plane per cell
+at 28, its default then, cost about twice as much), the Delta at 21 0.118 / 0.228 % (5 over), the Gough-Stewart at 22
 0.110 / 0.152 % (1 over, scan 5). The secants matter: without
 them (margins at the nodes alone, no looks between the nodes) V errs by up to 0.34 % (Delta),
 0.06 % (Tricept), 0.09 % (Gough-Stewart) at the defaults. The GDI's weak part is the boundary
@@ -408,9 +409,11 @@ one plane per cell at 26, 28 and 30 nodes per axis instead of 32 erred on the Go
 to 0.138 %, 0.203 % and 0.194 % of V (against the 4x reference, on the ladder's 3 and the scan's
 10 designs), its linear margins at 26 by 0.083 % (its cell rule now). On top of the fine
 pass come the coarse pass (1/8 of the nodes, plus the extreme edges'
-crossings), and the boundary: the margins at three points per cut edge (H4: 28 margins, 4 rods'
-reach, the 12 orderings of the z interval's bounds and its 8 bounds against the box, 4 joint
-limits), one membership test per cut edge, and the cut-cell sums.
+crossings), and the boundary: with one plane per cell the margins at three points per cut edge
+(H4: 28 margins, 4 rods' reach, the 12 orderings of the z interval's bounds and its 8 bounds
+against the box, 4 joint limits), one membership test per cut edge, and the cut-cell sums; with
+linear margins every node's margins (in the fine pass), one look per cut edge (its margins and
+1/kappa) and the band's clipped cells.
 """
 
 

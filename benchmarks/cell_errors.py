@@ -3,7 +3,8 @@
 Run: ``python -m benchmarks.cell_errors delta "scan 0"`` (a mechanism and one of the designs of
 ``python -m benchmarks.accuracy``: ``paper``, ``optimum k``, ``random k``, ``scan k``;
 ``--points`` random points per cell, default 400). Prints, for the boundary cells of
-``evaluate(mech)`` at its default resolution (numpy reference path), the cell fractions the rule
+``evaluate(mech, method="planes")`` (one plane per cell, whatever the mechanism's cell rule) at
+its default resolution (numpy reference path), the cell fractions the rule
 counts minus their Monte-Carlo fractions (the membership test at uniform random points of
 each cell), summed per kind of cell and given in % of V:
 
@@ -19,8 +20,8 @@ target: it says which cells the next cell rule must treat. Mechanisms with an ex
 are not supported (a cell's fraction there is a length, not a membership), nor those integrated
 by exact sections (the 2-RPR, the 3-RPR). Seeded (seed 1).
 
-``--candidate`` also measures the cell rule of ``evaluate(method="margins")`` (opt-in, not the
-default) on the same random points as the Monte Carlo (so that the two rules' difference carries
+``--candidate`` also measures the cell rule of ``evaluate(method="margins")`` (the Tricept's and
+the Gough-Stewart's cell rule, ``cell_rule``) on the same random points as the Monte Carlo (so that the two rules' difference carries
 no sampling noise): **linear margins** (:func:`linear_margin_inside`). Each of the mechanism's margins and the
 dexterity margin ``1/kappa^2 - limit^2`` is taken as linear over a cut node's cell: its value at
 the node, its central difference between the neighbouring nodes (one-sided where one is
@@ -90,7 +91,7 @@ def _captured_cut_cells(mech, resolution: int | None = None) -> dict:
     try:
         ws._boundary_corrected_sums, ws._edge_crossings, ws._faded_cube_fraction = sums, crossings, fraction
         with kernels.reference_kernels():
-            seen["evaluation"] = ws.evaluate(mech, resolution=resolution, error_estimate=False)
+            seen["evaluation"] = ws.evaluate(mech, resolution=resolution, method="planes", error_estimate=False)
     finally:
         for name, function in wrapped.items():
             setattr(ws, name, function)

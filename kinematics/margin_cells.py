@@ -1,5 +1,5 @@
 """The "linear margins" cell rule: the grid method's rule for a mechanism whose ``cell_rule`` is
-``"margins"`` (the Tricept), and ``evaluate(method="margins")`` for any mechanism with margins
+``"margins"`` (the Tricept, the Gough-Stewart), and ``evaluate(method="margins")`` for any mechanism with margins
 (docs/accuracy.md, "Order").
 
 Every grid node whose 26 neighbours share its membership counts its cell whole (inside) or not
@@ -205,7 +205,7 @@ def linear_margins(
     row_of[nodes] = np.arange(nodes.size)
     if secants is not None:
         _secants(at, slope, row_of, secants)
-    _borrow_dexterity(at, slope, row_of, nodes, margins.shape, sampled)
+    _borrow_dexterity(at, slope, margins.table[nodes, -1], row_of, nodes, margins.shape, sampled)
     return at, slope
 
 
@@ -217,19 +217,29 @@ def _neighbour_offsets(d: int) -> np.ndarray:
 
 
 def _borrow_dexterity(
-    at: np.ndarray, slope: np.ndarray, row_of: np.ndarray, nodes: np.ndarray, shape: tuple, sampled: list[int]
+    at: np.ndarray,
+    slope: np.ndarray,
+    table_dexterity: np.ndarray,
+    row_of: np.ndarray,
+    nodes: np.ndarray,
+    shape: tuple,
+    sampled: list[int],
 ) -> None:
     """The dexterity margin (last column, in place) of the nodes where it is still unknown (its
     node and face neighbours unreachable: a corner of the workspace reaches into its cell), the
-    linear model of the nearest neighbour among ``nodes`` (26 in 3-D, the face ones first) that
-    knows it, continued to the node. Why: the part of such a cell kept 1/kappa = 0, an under-count
-    of the GDI by the share of V in these parts (0.2 % of the Gough-Stewart's at 22 per axis,
-    0.05 % of the Tricept's), where the rule's cells elsewhere over-count it a little."""
+    linear model of the nearest neighbour among ``nodes`` (26 in 3-D, the face ones first) whose
+    own value is known (``table_dexterity``, per node of ``nodes``: not one extrapolated from its
+    face neighbours, whose slopes may be 0 where they had none), continued to the node; it then
+    bounds the cell's part too, as every margin does. Why: the part of such a cell kept
+    1/kappa = 0, an under-count of the GDI by the share of V in these parts (0.2 % of the
+    Gough-Stewart's at 22 per axis, 0.05 % of the Tricept's), where the rule's cells elsewhere
+    over-count it a little."""
     missing = np.nonzero(~np.isfinite(at[:, -1]))[0]
     if missing.size:
         _borrowed_dexterity(
             at,
             slope,
+            np.isfinite(table_dexterity),
             row_of,
             np.ascontiguousarray(nodes[missing]),
             missing,
@@ -240,10 +250,9 @@ def _borrow_dexterity(
 
 
 @kernels.jit
-def _borrowed_dexterity(at, slope, row_of, missing_nodes, missing, shape, sampled, offsets):
+def _borrowed_dexterity(at, slope, known, row_of, missing_nodes, missing, shape, sampled, offsets):
     """:func:`_borrow_dexterity`'s loop, compiled: per missing row the offsets in order, the
-    first neighbour (a row of ``at``) whose dexterity margin was known before any borrowing."""
-    known = np.isfinite(at[:, -1])
+    first neighbour (a row of ``at``) whose own dexterity margin is ``known``."""
     c = at.shape[1] - 1
     d = sampled.shape[0]
     strides = np.empty(shape.shape[0], dtype=np.int64)
@@ -284,13 +293,20 @@ def _secants(
     row_of: np.ndarray,
     secants: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
 ) -> None:
-    """The secants of :func:`linear_margins` into ``slope`` (in place)."""
+    """The secants of :func:`linear_margins` into ``slope`` (in place). Where one margin vanishes
+    on both sides of a node along one axis (a margin with a ridge between them), the nearer
+    crossing's secant: the better slope over the node's cell, and one answer whatever the order of
+    the crossings (an assignment to one entry twice keeps either)."""
     node, axis, distance, column = secants
     rows = row_of[node]
     keep = (rows >= 0) & (np.abs(distance) > 1e-9)
     rows, axis, distance, column = rows[keep], axis[keep], distance[keep], column[keep]
     defined = np.isfinite(at[rows, column])
     rows, axis, distance, column = rows[defined], axis[defined], distance[defined], column[defined]
+    entry = (rows * slope.shape[1] + column) * slope.shape[2] + axis
+    order = np.lexsort((np.abs(distance), entry))  # by entry, the nearest crossing first
+    first = order[np.r_[True, entry[order][1:] != entry[order][:-1]]]
+    rows, axis, distance, column = rows[first], axis[first], distance[first], column[first]
     slope[rows, column, axis] = -at[rows, column] / distance
 
 
@@ -355,14 +371,14 @@ def margin_cell_sums(
     ic : ndarray, grid shape
         The nodes' 1/kappa (NaN where unreachable).
     secants : tuple or None
-        The crossings' secants (:func:`linear_margins`); None where no edge is cut.
+        The crossings' secants (:func:`linear_margins`); None: none (no edge is cut).
     min_ic : float
         The dexterity limit on 1/kappa (dimensionless).
     """
     node_ic = np.where(inside, ic, 0.0)
-    if secants is None:
-        return float(inside.sum()), float(cell_means(node_ic, inside, sampled).sum())
     band = boundary_band(inside)
+    if not band.size:  # every node's neighbours share its membership: no cell is cut
+        return float(inside.sum()), float(cell_means(node_ic, inside, sampled).sum())
     at, slope = linear_margins(margins, sampled, secants, band)
     fraction, centroid = clipped_cell(at, slope)
     dex = at[:, -1] + np.einsum("md,md->m", slope[:, -1, :], centroid)

@@ -214,6 +214,12 @@ def _clip(faces, counts, n_faces, normal, level, points, scratch, angle):
 #: the fraction (measured against the clipper: 6e-13 and 4e-10 at 1e-3); the clipper takes the
 #: others
 ONE_PLANE_RATIO = 1e-3
+#: ... and where the node is at least this fraction of the largest slope from the plane (cell
+#: widths; nearer, the slopes ``|g| / |a|`` overflow: a fraction of NaN at ``|a| = 1e-200``), and,
+#: the node outside, the part is at least this much of the cell (``1 - f`` of a smaller corner
+#: loses its digits, its centroid lands cells away): the clipper takes those, exact too
+ONE_PLANE_NEAR = 1e-9
+ONE_PLANE_CORNER = 1e-6
 
 
 @kernels.inline_jit
@@ -258,8 +264,8 @@ def _one_plane(level, gradient, slopes, cut, active, moment):
         g = abs(gradient[cutting, j])
         if g > 0.0 and g < ONE_PLANE_RATIO * top:
             return False
-    if a == 0.0:
-        return False
+    if abs(a) < ONE_PLANE_NEAR * top:
+        return False  # a plane through (next to) the node: slopes |g| / |a| would overflow
     for j in range(d):
         slopes[j] = abs(gradient[cutting, j]) / abs(a)
     plane_cut(slopes, cut, active, moment)
@@ -269,9 +275,11 @@ def _one_plane(level, gradient, slopes, cut, active, moment):
         return True
     node_side = cut[0]
     rest = 1.0 - node_side
+    if rest < ONE_PLANE_CORNER:
+        return False  # a corner of the cell: 1 - f and the centroid lose their digits
     cut[0] = rest
     for j in range(d):
-        part = -node_side * cut[j + 1] / rest if rest > 0.0 else 0.0
+        part = min(max(-node_side * cut[j + 1] / rest, -0.5), 0.5)
         cut[j + 1] = part if gradient[cutting, j] > 0.0 else -part
     return True
 

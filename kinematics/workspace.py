@@ -35,12 +35,12 @@ for a planar boundary and second order for a smooth one, and continuous in the
 design (no step when the boundary crosses a node); it costs more than the plain
 count at each mechanism's default (the ratios: docs/accuracy.md). That is the cell rule
 ``"planes"``; a mechanism whose :attr:`~kinematics.base.Mechanism.cell_rule` is ``"margins"``
-(the Tricept) counts the cells along the boundary under its margins, each linear over the
+(the Tricept, the Gough-Stewart) counts the cells along the boundary under its margins, each linear over the
 cell, instead (:mod:`kinematics.margin_cells`, crossings by :func:`_margin_secants`), which
 holds a corner and a slab thinner than a cell; ``method="planes"`` and ``method="margins"``
 force either rule. Its default resolution
 is the mechanism's ``grid_nodes`` budget where set (H4 30 x 30 x 15, half the nodes
-along theta: ``grid_axis_nodes``; Tricept 20^3, Delta 26^3), else ``default_nodes``. ``method="midpoint"``: the plain
+along theta: ``grid_axis_nodes``; Tricept 20^3, Delta and Gough-Stewart 26^3), else ``default_nodes``. ``method="midpoint"``: the plain
 cell-centre count on a regular grid of ``default_nodes`` (first order; it moves
 in steps as the boundary crosses cell centres), the objective of earlier
 versions, kept for comparison. Where a mechanism has an axis along which nothing
@@ -1551,8 +1551,11 @@ def _cut_edges(inside, strides, sizes):
 def _edge_first_roots(inside, table, lower, stride):
     """Per grid edge from node ``lower`` to ``lower + stride`` (E,) whose ends differ in
     membership (``inside`` (N,)): its inside and outside end nodes, and the first sign change
-    of the margins (rows of ``table``, (N + 1, K + 1)) linear between them, as a fraction of
-    the way from the inside end over the margins known at both ends (NaN: none changes sign)."""
+    of the margins (rows of ``table``, (N + 1, K + 1); the last column the dexterity margin)
+    linear between them, as a fraction of the way from the inside end. NaN where none changes
+    sign or, as in step 1 of :func:`_crossings`, a reachability margin is unknown at an end: the
+    one that binds there may be it (the Delta's joint angles beyond its reach: its secant then
+    fell on another margin, up to 0.8 cells past the crossing), and the edge has no secant."""
     e, count = lower.shape[0], table.shape[1]
     inner = np.empty(e, dtype=np.int64)
     outer = np.empty(e, dtype=np.int64)
@@ -1565,6 +1568,9 @@ def _edge_first_roots(inside, table, lower, stride):
         best = np.inf
         for c in range(count):
             g_in, g_out = table[a, c], table[b, c]
+            if c < count - 1 and (np.isnan(g_in) or np.isnan(g_out)):
+                best = np.inf
+                break
             if g_in >= 0.0 and g_out < 0.0:
                 best = min(best, g_in / (g_in - g_out))
         first[i] = best if best < np.inf else np.nan
@@ -1580,7 +1586,8 @@ def _margin_secants(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
     """The crossings of ``method="margins"``: on every grid edge whose ends differ in membership,
     the margin that vanishes first along it and where, seen from both ends (the secants of
-    :func:`kinematics.margin_cells.linear_margins`). None where no edge is cut.
+    :func:`kinematics.margin_cells.linear_margins`). None where no edge is cut (the arrays are
+    empty where edges are cut but none has a secant).
 
     Steps 1-2 of :func:`_crossings` on the nodes' margins (``margins.table``, reachability and
     dexterity margins of every node): the margins linear between the ends, their first sign
@@ -1589,9 +1596,10 @@ def _margin_secants(
     first root in the bracket where they change sign (:func:`_refined_crossing`). Third order in
     the edge length, continuous in the design. Why not :func:`_crossings` itself: the rule
     needs the crossing's margin, not the integrands there, and the ends' margins are known; its
-    membership test, second looks and the margins at both ends again cost the Tricept at 20 per
-    axis a third of its evaluation. An edge whose margins do not change sign between its ends
-    (an end's margin undefined) has no secant.
+    second looks, the integrands at the crossing and the margins at both ends again cost the
+    Tricept at 20 per axis a third of its evaluation (the look's ``1/kappa`` comes from the
+    membership test's call, its verdict unused). An edge whose margins do not change sign
+    between its ends, or where a reachability margin is unknown at an end, has no secant.
 
     Returns
     -------
@@ -1613,7 +1621,8 @@ def _margin_secants(
     ahead = inner == lower  # the crossing lies ahead of the lower node where it is inside
     look = np.nonzero(np.isfinite(linear))[0]
     if not look.size:
-        return None
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty, np.zeros(0), empty
     t1 = linear[look]
     g_in, g_out = table[inner[look]], table[outer[look]]
     column = np.asarray(sampled, dtype=np.int64)[axis[look]]
@@ -1957,9 +1966,10 @@ def _integrate_grid(
     fraction is 1/2 from either side. ``steps``: bisections per crossing the margins
     cannot place.
 
-    ``margins=True`` (``method="margins"``, with ``refine``): the same grid and crossings, and
-    the cells along the boundary counted by the linear-margins rule of
-    :mod:`kinematics.margin_cells` instead of one plane per cell.
+    ``margins=True`` (the linear-margins cell rule, with ``refine``): the same grid, every node's
+    margins computed with it, crossings from them (:func:`_margin_secants`), and the cells along
+    the boundary counted by the rule of :mod:`kinematics.margin_cells` instead of one plane per
+    cell.
     """
     exact = _exact_axis(mechanism, fixed)
     box = mechanism.pose_bounds(orientation)
@@ -2289,7 +2299,8 @@ def _integrate_polar(mechanism, resolution, orientation, min_ic, length, keep_sa
 def _check_margins_method(mechanism: Mechanism, orientation: tuple[float, float], fixed: dict[str, float]) -> None:
     """ValueError (one line) where the linear-margins cell rule (``method="margins"``, or a
     mechanism's ``cell_rule``) cannot integrate: a mechanism without reachability margins, with
-    an exact axis, or a grid of more than 3 sampled axes."""
+    an exact axis, or a grid of more than 3 sampled axes (the messages name the rule as the
+    method: a mechanism's own rule reaches here only with the first two, a defect of its class)."""
     exact = _exact_axis(mechanism, fixed)
     if exact is not None:
         raise ValueError(
@@ -2329,7 +2340,8 @@ def evaluate(
         Grid points per sampled axis (larger is finer; doubling it refines
         every axis). Default :func:`default_resolution`: for ``method="grid"`` the node budget
         :attr:`~kinematics.base.Mechanism.grid_nodes` spread over the sampled axes where set
-        (H4 30, with 15 along theta; Tricept 20, Delta 26), else :attr:`~kinematics.base.Mechanism.default_nodes`
+        (H4 30, with 15 along theta; Tricept 20, Delta and Gough-Stewart 26), else
+        :attr:`~kinematics.base.Mechanism.default_nodes`
         (H4 24, Tricept 32, 3-RPR 32 over (x, y, phi) or 181 at constant phi, 2-RPR 400), which
         ``method="midpoint"`` always takes.
     orientation : (float, float), optional
@@ -2348,12 +2360,13 @@ def evaluate(
         default: second order, continuous in the design; dearer than the plain
         count at the defaults, docs/accuracy.md), each cell by the mechanism's
         :attr:`~kinematics.base.Mechanism.cell_rule` (one plane through its crossings, or
-        linear margins: the Tricept's); the plain cell-centre count (first order,
+        linear margins: the Tricept's and the Gough-Stewart's); the plain cell-centre count (first order,
         the objective of earlier versions); the Tricept paper's polar
         boundary search; or the grid with either cell rule whatever the mechanism's:
         ``"margins"`` (:mod:`kinematics.margin_cells`: mechanisms with margins and no exact axis,
-        at most 3 sampled axes) or ``"planes"``. All three grids take the grid's default
-        resolution.
+        at most 3 sampled axes) or ``"planes"`` (the cell grid also for a mechanism the grid
+        method integrates by exact sections: the 3-RPR, the 2-RPR). All three grids take the
+        grid's default resolution.
     fixed : dict, optional
         Pose variables held at a value (e.g. ``{"z": 0.0}`` for a slice);
         the volume is the measure over the others.

@@ -1,5 +1,6 @@
 """``evaluate(method="margins")``: the linear-margins cell rule (kinematics/margin_cells.py),
-opt-in. Against the grid method's 4x reference, its refusals, and the parts it is made of."""
+the Tricept's and the Gough-Stewart's cell rule (``cell_rule``), ``method="margins"`` on any mechanism
+with margins. Against one plane per cell at 4x, its refusals, and the parts it is made of."""
 
 from __future__ import annotations
 
@@ -89,8 +90,9 @@ def test_cell_means_add_a_24th_of_the_second_differences():
 
 def test_planes_is_the_grid_method_where_the_mechanism_counts_by_planes_and_the_rule_is_checked():
     """``method="planes"`` forces one plane per cell: the grid method itself, bit for bit, for a
-    mechanism whose ``cell_rule`` is ``"planes"`` (the Delta); a class declaring an unknown rule
-    is refused when it is defined."""
+    mechanism whose ``cell_rule`` is ``"planes"`` and whose grid method is a cell grid (the Delta;
+    the planar mechanisms' is exact sections); a class declaring an unknown rule is refused when
+    it is defined."""
     from kinematics.base import Mechanism
 
     delta = get_mechanism("delta", **PAPER_DESIGNS["delta"])

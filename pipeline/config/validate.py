@@ -27,10 +27,18 @@ from pipeline.optimizers.reference import expected_evaluations as reference_eval
 
 #: conservative grid throughput (nodes/s per worker) for the run-time estimate (midpoint count)
 NODES_PER_SECOND = 1.0e6
-#: cost of a grid node relative to the midpoint count's, per ``evaluate.method``: the grid method's
-#: boundary cells (coarse pass, bisections, cut-cell fractions) cost 2x (Tricept) to 5x (H4)
-#: per node at the mechanisms' default resolutions (docs/accuracy.md, "Measured")
-METHOD_COST = {"midpoint": 1.0, "grid": 5.0}
+#: cost of a grid node relative to the midpoint count's, per ``evaluate.method`` and, for the grid
+#: method, per cell rule (``Mechanism.cell_rule``): one plane per cell costs up to 5x (H4) per node
+#: at the mechanisms' default resolutions, linear margins up to 9x (the Tricept: about 2x the
+#: midpoint default's time on a quarter of its nodes; docs/accuracy.md, "Measured")
+METHOD_COST = {"midpoint": 1.0, "grid": 5.0, "margins": 10.0}
+
+
+def _node_cost(mech, method: str) -> float:
+    """:data:`METHOD_COST` of the run's method, the grid method's by the mechanism's cell rule."""
+    return METHOD_COST["margins" if method == "grid" and mech.cell_rule == "margins" else method]
+
+
 #: the largest evaluate.max_nodes the schema accepts (EvaluateConfig's range check): a larger
 #: budget is suggested only up to it
 MAX_NODES = 10**9
@@ -162,7 +170,7 @@ def _check_budget(c: Config, mech) -> None:
     # nodes per second of the whole run: the method's per-worker throughput x the workers, which a
     # local backend caps at the cores this process may use (a dask cluster's are elsewhere)
     workers = c.parallel.n_jobs if c.parallel.backend == "dask" else worker_count(c.parallel.n_jobs)
-    rate = NODES_PER_SECOND / METHOD_COST[method] * workers
+    rate = NODES_PER_SECOND / _node_cost(mech, method) * workers
 
     def hours_at(resolution: int) -> float:
         return evaluations * nodes_at(resolution) / rate / 3600
@@ -196,7 +204,7 @@ def _check_budget(c: Config, mech) -> None:
         f"evaluate.max_hours={c.evaluate.max_hours:g} is invalid: the run at evaluate.resolution={res}{default} "
         f"is estimated at up to {hours:.3g} h ({evaluations} evaluations of {nodes_at(res):.3g} nodes"
         + (f", {reference} of them the reference optimum's," if reference else "")
-        + f" at {NODES_PER_SECOND / METHOD_COST[method]:.0e} nodes/s/worker x {workers} workers of "
+        + f" at {NODES_PER_SECOND / _node_cost(mech, method):.0e} nodes/s/worker x {workers} workers of "
         f"parallel.n_jobs={c.parallel.n_jobs}; cached stages counted too); "
         f"allowed: {', or '.join(fixes)}"
     )
