@@ -802,6 +802,26 @@ def _refined_crossing(
     negative it goes to ``tm`` as the middle value goes to zero, from either side. A margin that
     only touches zero at ``tm`` (an outside pocket opening in the middle of the edge) still moves
     the first crossing by a jump, as the first boundary along the edge itself does."""
+    roots = _margin_roots(reach, reach_mid, dex_in, dex_mid, dex_out, rows, tm)
+    which = np.argmin(roots, axis=1)
+    first = roots[np.arange(roots.shape[0]), which]
+    found = np.isfinite(first)
+    return np.where(found, first, tm), np.where(found, which, -1)
+
+
+def _margin_roots(
+    reach: np.ndarray,
+    reach_mid: np.ndarray,
+    dex_in: np.ndarray,
+    dex_mid: np.ndarray,
+    dex_out: np.ndarray,
+    rows: np.ndarray,
+    tm: np.ndarray,
+) -> np.ndarray:
+    """Each margin's root (M, K + 1; inf: none) of :func:`_refined_crossing` (its arguments), the
+    first of which is the crossing: the parabola through its three values, its root in the
+    bracket where they change sign (the line through the first two where the outside end's is
+    unknown)."""
     n = dex_in.size
     g0 = _stacked(reach[:n][rows], dex_in[rows])
     g1 = _stacked(reach[n:][rows], dex_out[rows])
@@ -827,11 +847,7 @@ def _refined_crossing(
         line = t * g0 / (g0 - gm)
         line = np.where((gm < g0) & (line >= 0.0) & (line <= 1.0), line, np.inf)
         roots = np.where(np.isnan(g1) | (t <= 0.0) | (t >= 1.0), line, quadratic)
-    roots = np.where(np.isnan(gm) | np.isnan(g0), np.inf, roots)
-    which = np.argmin(roots, axis=1)
-    first = roots[np.arange(roots.shape[0]), which]
-    found = np.isfinite(first)
-    return np.where(found, first, tm), np.where(found, which, -1)
+    return np.where(np.isnan(gm) | np.isnan(g0), np.inf, roots)
 
 
 @kernels.vector_jit
@@ -861,6 +877,52 @@ def _linear_crossing_compiled(reach, dex_in, dex_out):
     return out
 
 
+@kernels.inline_jit
+def _margin_root(a, mid, b, t):
+    """One margin's root of :func:`_refined_crossing_compiled` (its values ``a``, ``mid``, ``b``
+    at the inside end, at ``t`` and at the outside end; inf: none), as :func:`_margin_roots`."""
+    if np.isnan(mid) or np.isnan(a):
+        return np.inf
+    if np.isnan(b) or t <= 0.0 or t >= 1.0:
+        s = t * a / (a - mid)
+        return s if (mid < a and s >= 0.0 and s <= 1.0) else np.inf
+    if mid < 0.0:  # the bracket where the three values change sign
+        lo, hi, ga, gb = 0.0, t, a, mid
+    elif b < 0.0:
+        lo, hi, ga, gb = t, 1.0, mid, b
+    else:
+        return np.inf  # not negative at any of the three points: no root
+    c2 = ((mid - a) - t * (b - a)) / (t * (t - 1.0))
+    c1 = b - a - c2
+    disc = c1 * c1 - 4.0 * c2 * a
+    root = np.inf
+    if disc >= 0.0:
+        qq = -0.5 * (c1 + math.copysign(math.sqrt(disc), c1))
+        for s in (qq / c2, a / qq):
+            if s >= lo and s <= hi and s < root:
+                root = s
+    if root == np.inf:  # rounding at a bracket's end: the line between its two values
+        root = lo + (hi - lo) * ga / (ga - gb)
+    return root
+
+
+@kernels.vector_jit
+def _margin_roots_compiled(reach, reach_mid, dex_in, dex_mid, dex_out, rows, tm):
+    """:func:`_margin_roots`, one row at a time (the same operations)."""
+    n = dex_in.shape[0]
+    k = reach.shape[1]
+    m = rows.shape[0]
+    roots = np.empty((m, k + 1))
+    for q in range(m):
+        r = rows[q]
+        for c in range(k + 1):
+            a = reach[r, c] if c < k else dex_in[r]
+            mid = reach_mid[q, c] if c < k else dex_mid[q]
+            b = reach[n + r, c] if c < k else dex_out[r]
+            roots[q, c] = _margin_root(a, mid, b, tm[q])
+    return roots
+
+
 @kernels.vector_jit
 def _refined_crossing_compiled(reach, reach_mid, dex_in, dex_mid, dex_out, rows, tm):
     """:func:`_refined_crossing`, one row at a time (the same operations)."""
@@ -878,29 +940,7 @@ def _refined_crossing_compiled(reach, reach_mid, dex_in, dex_mid, dex_out, rows,
             a = reach[r, c] if c < k else dex_in[r]
             mid = reach_mid[q, c] if c < k else dex_mid[q]
             b = reach[n + r, c] if c < k else dex_out[r]
-            if np.isnan(mid) or np.isnan(a):
-                continue
-            if np.isnan(b) or t <= 0.0 or t >= 1.0:
-                s = t * a / (a - mid)
-                root = s if (mid < a and s >= 0.0 and s <= 1.0) else np.inf
-            else:
-                if mid < 0.0:  # the bracket where the three values change sign
-                    lo, hi, ga, gb = 0.0, t, a, mid
-                elif b < 0.0:
-                    lo, hi, ga, gb = t, 1.0, mid, b
-                else:
-                    continue  # not negative at any of the three points: no root
-                c2 = ((mid - a) - t * (b - a)) / (t * (t - 1.0))
-                c1 = b - a - c2
-                disc = c1 * c1 - 4.0 * c2 * a
-                root = np.inf
-                if disc >= 0.0:
-                    qq = -0.5 * (c1 + math.copysign(math.sqrt(disc), c1))
-                    for s in (qq / c2, a / qq):
-                        if s >= lo and s <= hi and s < root:
-                            root = s
-                if root == np.inf:  # rounding at a bracket's end: the line between its two values
-                    root = lo + (hi - lo) * ga / (ga - gb)
+            root = _margin_root(a, mid, b, t)
             if root < best:
                 best = root
                 best_c = c
@@ -1585,7 +1625,7 @@ def _margin_secants(
     inside: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
     """The crossings of ``method="margins"``: on every grid edge whose ends differ in membership,
-    the margin that vanishes first along it and where, seen from both ends (the secants of
+    each margin that vanishes along it and where, seen from both ends (the secants of
     :func:`kinematics.margin_cells.linear_margins`). None where no edge is cut (the arrays are
     empty where edges are cut but none has a secant).
 
@@ -1593,8 +1633,10 @@ def _margin_secants(
     dexterity margins of every node): the margins linear between the ends, their first sign
     change ``t1`` over the margins known at both ends; one look at ``t1`` (the reachability
     margins and ``1/kappa`` there); each margin as the parabola through its three values, its
-    first root in the bracket where they change sign (:func:`_refined_crossing`). Third order in
-    the edge length, continuous in the design. Why not :func:`_crossings` itself: the rule
+    root in the bracket where they change sign (:func:`_margin_roots`). Third order in the edge
+    length, continuous in the design. Every margin with a root gets its secant, not only the
+    first: two margins that vanish at the same crossing (the Gough-Stewart's symmetric legs) were
+    one or the other by the last bit, the compiled and numpy paths 1e-6 of V apart. Why not :func:`_crossings` itself: the rule
     needs the crossing's margin, not the integrands there, and the ends' margins are known; its
     second looks, the integrands at the crossing and the margins at both ends again cost the
     Tricept at 20 per axis a third of its evaluation (the look's ``1/kappa`` comes from the
@@ -1603,11 +1645,11 @@ def _margin_secants(
 
     Returns
     -------
-    node, axis, distance, column : ndarray (2E,) each
-        Per crossing and end: the end node (flat index), the sampled axis (index into
-        ``sampled``), the signed distance from the node to the crossing (cell widths, + towards
-        the node above) and the vanishing margin (a column of ``margins.table``; K the dexterity
-        margin).
+    node, axis, distance, column : ndarray (2R,) each
+        Per root (of a margin on an edge) and end: the end node (flat index), the sampled axis
+        (index into ``sampled``), the signed distance from the node to the root (cell widths, +
+        towards the node above) and the vanishing margin (a column of ``margins.table``; K the
+        dexterity margin).
     """
     flat_inside = np.ascontiguousarray(inside.ravel())
     strides = np.array([margins.strides[j] for j in sampled], dtype=np.int64)
@@ -1633,9 +1675,9 @@ def _margin_secants(
     at[rows, column] += towards * t1 * widths[axis[look]]
     reach_1 = values.margins(at)
     _, _, ic_1, _ = values(at)
-    refined = _refined_crossing_compiled if kernels.compiled() else _refined_crossing
+    margin_roots = _margin_roots_compiled if kernels.compiled() else _margin_roots
     reach = np.ascontiguousarray(np.vstack([g_in[:, :k], g_out[:, :k]]))
-    t2, which = refined(
+    roots = margin_roots(
         reach,
         np.ascontiguousarray(reach_1),
         np.ascontiguousarray(g_in[:, k]),
@@ -1644,8 +1686,8 @@ def _margin_secants(
         rows,
         t1,
     )
-    found = which >= 0
-    t2, which, towards, look = t2[found], which[found], towards[found], look[found]
+    edge, which = np.nonzero(np.isfinite(roots))
+    t2, towards, look = roots[edge, which], towards[edge], look[edge]
     node = np.concatenate([inner[look], outer[look]])
     distance = np.concatenate([towards * t2, -towards * (1.0 - t2)])
     return node, np.tile(axis[look], 2), distance, np.tile(which, 2)
