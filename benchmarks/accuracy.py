@@ -208,15 +208,15 @@ is `docs/figures/accuracy_convergence.png`.
    node's cell), the nearest of its 26 neighbours that does lends its linear model (that part's
    1/kappa was 0 before: the GDI under-counted by the share of V in such parts, 0.2 % on the
    Gough-Stewart at 22 per axis, 0.05 % on the Tricept). Why the Tricept: at 20^3 nodes it is
-   within 0.1 % on every design of the ladder and the scan (at most 0.087 %, the GDI of a scan
-   design; 12 further random designs, seed 8: at most 0.081 %), where one plane per cell needed
+   within 0.1 % on every design of the ladder and the scan (at most 0.089 %, the GDI of a scan
+   design; 12 further random designs, seed 8: at most 0.082 %), where one plane per cell needed
    28^3 and still missed a scan design (0.120 %), at about the cost one plane per cell had at
-   28^3 (the tables below); at 19^3 and 18^3 its GDI misses on 7 and 5 of the 16 designs (up to
-   0.115 % and 0.120 %); it has no step where a slab empties (Continuity). Why the
+   28^3 (the tables below); at 19^3 and 18^3 its GDI misses on 8 and 5 of the 16 designs (up to
+   0.117 % and 0.124 %); it has no step where a slab empties (Continuity). Why the
    Gough-Stewart (its constant-orientation grid; a 6-D grid keeps one plane per cell): at 26^3
-   nodes it is within 0.1 % on the 13 designs (at most 0.083 %) at about 1.8x the old default's
+   nodes it is within 0.1 % on the 13 designs (at most 0.085 %) at about 1.8x the old default's
    cost, where one plane per cell at 32^3 cost about 2.6x and fewer nodes did not hold (below);
-   at 22^3 and 24^3 its V misses on 3 and 2 designs (0.130 %, 0.113 %). Why not the Delta yet:
+   at 22^3 and 24^3 its V misses on 3 and 2 designs (0.131 %, 0.115 %). Why not the Delta yet:
    the table "The linear-margins rule" below (its GDI misses, its boundary costlier than its
    nodes save).
 7. **Planar mechanisms: exact sections** (`RPR3.exact_sections`, `RPR2.exact_sections`, one
@@ -333,7 +333,7 @@ looks per cut edge, a membership test and the margins at each crossing again) to
 GDI's remaining bias is positive (the Tricept's +0.03 to +0.09 %): 1/kappa of a band cell's part
 is the square root of the linear model at the part's centroid, above its mean over the part
 (1/kappa is concave there); with the part's exact mean of the same model (Monte Carlo, measured
-after the fact) the Tricept at 18 per axis is within 0.085 % (0.120 % at the centroid). It is
+after the fact) the Tricept at 18 per axis is within 0.089 % (0.124 % at the centroid). It is
 the Gough-Stewart's cell rule too, at 26 per axis (its GDI's misses at 22, -0.15 %, were the
 parts without a dexterity model, now lent one: 0.04 %). Not yet the Delta's (the table "The
 linear-margins rule" below): its GDI misses at fewer nodes than its default and its boundary
@@ -407,7 +407,7 @@ about twice as many reachable nodes, each a 6 x 6 SVD, into the workspace as the
 the whole box), 2x needs a rule accurate to 0.1 % on fewer nodes rather than a faster boundary:
 one plane per cell at 26, 28 and 30 nodes per axis instead of 32 erred on the Gough-Stewart by up
 to 0.138 %, 0.203 % and 0.194 % of V (against the 4x reference, on the ladder's 3 and the scan's
-10 designs), its linear margins at 26 by 0.083 % (its cell rule now). On top of the fine
+10 designs), its linear margins at 26 by 0.085 % (its cell rule now). On top of the fine
 pass come the coarse pass (1/8 of the nodes, plus the extreme edges'
 crossings), and the boundary: with one plane per cell the margins at three points per cut edge
 (H4: 28 margins, 4 rods' reach, the 12 orderings of the z interval's bounds and its 8 bounds

@@ -242,9 +242,9 @@ class GoughStewart(Mechanism):
     #: 32^3 nodes: the constant-orientation default samples (x, y, z)
     default_nodes = 32**3
     #: linear margins at 26^3 nodes (the constant-orientation grid; a 6-D one keeps one plane per
-    #: cell): V, GDI and eta within 0.1 % on the 13 designs of docs/accuracy.md (at most 0.083 %,
+    #: cell): V, GDI and eta within 0.1 % on the 13 designs of docs/accuracy.md (at most 0.085 %,
     #: at about 1.8x the cost of the cell-centre count at 32^3), where one plane per cell at 32^3
-    #: cost about 2.6x; at 22^3 and 24^3 V misses on 3 and 2 of them (0.130 %, 0.113 %)
+    #: cost about 2.6x; at 22^3 and 24^3 V misses on 3 and 2 of them (0.131 %, 0.115 %)
     cell_rule = "margins"
     grid_nodes = 26**3
     min_resolution = 16

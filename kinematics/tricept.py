@@ -174,8 +174,8 @@ class Tricept(Mechanism):
     )
     default_nodes = 32**3
     # linear margins at 20^3 nodes: V, GDI and eta within 0.1 % on the ladder's and the scan's designs
-    # of docs/accuracy.md and 12 more random ones (at most 0.087 %, the GDI of a scan design; at 19^3
-    # and 18^3 the GDI misses on 7 and 5 of the 16: 0.115 %, 0.120 %); one plane per cell needed
+    # of docs/accuracy.md and 12 more random ones (at most 0.089 %, the GDI of a scan design; at 19^3
+    # and 18^3 the GDI misses on 8 and 5 of the 16: 0.117 %, 0.124 %); one plane per cell needed
     # 28^3 and missed a scan design. Continuous where a slab thinner than a cell empties (the
     # planes stepped there, along b)
     cell_rule = "margins"
