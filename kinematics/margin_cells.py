@@ -1,6 +1,6 @@
 """The "linear margins" cell rule: the grid method's rule for a mechanism whose ``cell_rule`` is
-``"margins"`` (the Tricept, the Gough-Stewart), and ``evaluate(method="margins")`` for any mechanism with margins
-(docs/accuracy.md, "Order").
+``"margins"`` (the Tricept, the Gough-Stewart), and ``evaluate(method="margins")`` for any
+mechanism with margins (docs/accuracy.md, "Order").
 
 Every grid node whose 26 neighbours share its membership counts its cell whole (inside) or not
 at all. Every other node, the **band** along the boundary (the cut cells and the uncut cells
@@ -14,9 +14,10 @@ linear over the cell:
 - its change per cell width along each sampled axis, the central difference of the nodes'
   values (one-sided where a neighbour is undefined);
 - along an axis whose grid edge from the node crosses the boundary
-  (:func:`kinematics.workspace._margin_secants`: the first margin to vanish along the edge, placed
-  on the parabola through its values at the two nodes and at one look between them), that
-  margin takes the secant through its zero there. Why the secants: the margins curve (an arccos
+  (:func:`kinematics.workspace._margin_secants`: each margin that vanishes along the edge, its
+  zero placed on the parabola through its values at the two nodes and at one look between
+  them), that margin takes the secant through its zero there (the nearer zero where it vanishes
+  on both sides of the node). Why the secants: the margins curve (an arccos
   near the reach limit), and from the nodes' values alone V erred by up to 0.34 % (Delta,
   defaults) against 0.05 % with them.
 
