@@ -35,8 +35,8 @@ for a planar boundary and second order for a smooth one, and continuous in the
 design (no step when the boundary crosses a node); it costs more than the plain
 count at each mechanism's default (the ratios: docs/accuracy.md). That is the cell rule
 ``"planes"``; a mechanism whose :attr:`~kinematics.base.Mechanism.cell_rule` is ``"margins"``
-(the Tricept, the Gough-Stewart) counts the cells along the boundary under its margins, each linear over the
-cell, instead (:mod:`kinematics.margin_cells`, crossings by :func:`_margin_secants`), which
+(the Tricept, the Gough-Stewart) counts the cells along the boundary under its margins, each
+linear over the cell, instead (:mod:`kinematics.margin_cells`, crossings by :func:`_margin_secants`), which
 holds a corner and a slab thinner than a cell; ``method="planes"`` and ``method="margins"``
 force either rule. Its default resolution
 is the mechanism's ``grid_nodes`` budget where set (H4 30 x 30 x 15, half the nodes
@@ -1379,10 +1379,10 @@ def _crossing_weights(slopes: np.ndarray) -> np.ndarray:
 @kernels.inline_jit
 def _faded_plane_cut(c, plane, cut, part, active, moment):
     """:func:`_faded_cube_fraction` of one cell: slopes ``c`` (d,) in, ``cut`` (d + 1,) out (as
-    :func:`kinematics.polytope.plane_cut`); ``plane`` (d,), ``part`` (d + 1,), ``active``, ``moment`` scratch. Only
-    the cuts of non-zero weight are made (a crossing of weight 1 is always kept, one of weight
-    0 always left out: most cells have no fading crossing and one cut), in the numpy path's
-    order, so that the sums are the same."""
+    :func:`kinematics.polytope.plane_cut`); ``plane`` (d,), ``part`` (d + 1,), ``active``,
+    ``moment`` scratch. Only the cuts of non-zero weight are made (a crossing of weight 1 is
+    always kept, one of weight 0 always left out: most cells have no fading crossing and one
+    cut), in the numpy path's order, so that the sums are the same."""
     d = c.shape[0]
     top = 0.0
     fading = 0  # bit j: axis j's crossing fades
@@ -1631,13 +1631,14 @@ def _margin_secants(
 
     Steps 1-2 of :func:`_crossings` on the nodes' margins (``margins.table``, reachability and
     dexterity margins of every node): the margins linear between the ends, their first sign
-    change ``t1`` over the margins known at both ends; one look at ``t1`` (the reachability
-    margins and ``1/kappa`` there); each margin as the parabola through its three values, its
-    root in the bracket where they change sign (:func:`_margin_roots`). Third order in the edge
-    length, continuous in the design. Every margin with a root gets its secant, not only the
-    first: two margins that vanish at the same crossing (the Gough-Stewart's symmetric legs) were
-    one or the other by the last bit, the compiled and numpy paths 1e-6 of V apart. Why not :func:`_crossings` itself: the rule
-    needs the crossing's margin, not the integrands there, and the ends' margins are known; its
+    change ``t1`` (:func:`_edge_first_roots`); one look at ``t1`` (the reachability margins and
+    ``1/kappa`` there); each margin as the parabola through its three values, its root in the
+    bracket where they change sign (:func:`_margin_roots`). Third order in the edge length,
+    continuous in the design. Every margin with a root gets its secant, not only the first: two
+    margins that vanish at the same crossing (the Gough-Stewart's symmetric legs) were one or
+    the other by the last bit, the compiled and numpy paths 1e-6 of V apart. Why not
+    :func:`_crossings` itself: the rule needs the crossing's margins, not the integrands there,
+    and the ends' margins are known; its
     second looks, the integrands at the crossing and the margins at both ends again cost the
     Tricept at 20 per axis a third of its evaluation (the look's ``1/kappa`` comes from the
     membership test's call, its verdict unused). An edge whose margins do not change sign
