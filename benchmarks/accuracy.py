@@ -867,7 +867,7 @@ def main() -> None:
         + "\n\n"
         + scan_calibration(results)
         + '\n\nThe linear-margins rule `evaluate(method="margins")` (`kinematics.margin_cells`) where it is '
-        "not the mechanism's cell rule (the Tricept's is, see \"Order\"), on the ladder's and the scan's designs against the same references, "
+        "not the mechanism's cell rule (the Tricept's and the Gough-Stewart's are, see \"Order\"), on the ladder's and the scan's designs against the same references, "
         "at the grid method's default resolution and at about a third of its nodes; its cost on the paper "
         "design against the old default, timed alternately as the ladder:\n\n"
         + margins_table(results)
