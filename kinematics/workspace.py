@@ -925,29 +925,23 @@ def _margin_roots_compiled(reach, reach_mid, dex_in, dex_mid, dex_out, rows, tm)
 
 @kernels.vector_jit
 def _refined_crossing_compiled(reach, reach_mid, dex_in, dex_mid, dex_out, rows, tm):
-    """:func:`_refined_crossing`, one row at a time (the same operations)."""
-    n = dex_in.shape[0]
-    k = reach.shape[1]
+    """:func:`_refined_crossing`, one row at a time (the same operations): the first of
+    :func:`_margin_roots_compiled`'s roots per row (the first margin on a tie)."""
+    roots = _margin_roots_compiled(reach, reach_mid, dex_in, dex_mid, dex_out, rows, tm)
     m = rows.shape[0]
     first = np.empty(m)
     which = np.empty(m, dtype=np.int64)
     for q in range(m):
-        r = rows[q]
-        t = tm[q]
         best = np.inf
         best_c = -1
-        for c in range(k + 1):
-            a = reach[r, c] if c < k else dex_in[r]
-            mid = reach_mid[q, c] if c < k else dex_mid[q]
-            b = reach[n + r, c] if c < k else dex_out[r]
-            root = _margin_root(a, mid, b, t)
-            if root < best:
-                best = root
+        for c in range(roots.shape[1]):
+            if roots[q, c] < best:
+                best = roots[q, c]
                 best_c = c
         if best < np.inf:
             first[q], which[q] = best, best_c
         else:
-            first[q], which[q] = t, -1
+            first[q], which[q] = tm[q], -1
     return first, which
 
 
