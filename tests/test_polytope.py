@@ -137,3 +137,16 @@ def test_one_cutting_margin_in_closed_form_agrees_with_the_clipper(d: int) -> No
     np.testing.assert_array_equal(with_miss[0], one)
     np.testing.assert_array_equal(with_miss[1], one_centroid)
     assert one.min() < 0.05 and one.max() > 0.95
+
+
+def test_a_plane_through_the_node_and_a_tiny_corner_stay_finite_and_in_the_cell() -> None:
+    """The closed form of one margin leaves two cases to the clipper: a plane through (next to) the
+    node, whose slopes ``|g| / |a|`` overflowed (fraction NaN at ``a = 1e-200``), and, the node
+    outside, a corner of under 1e-6 of the cell, whose ``1 - f`` lost its digits (centroid up to 49
+    cells away)."""
+    g = np.array([[[1.0, 1.0, 1.0]]])
+    for a in (1e-200, -1e-310, 0.0):
+        fraction, centroid = clipped_cell(np.array([[a]]), g)
+        assert fraction[0] == pytest.approx(0.5) and np.all(np.abs(centroid) <= 0.5)
+    fraction, centroid = clipped_cell(np.array([[-1.49999]]), g)  # the corner u = (1/2, 1/2, 1/2)
+    assert 0.0 < fraction[0] < 1e-6 and np.all(np.abs(centroid) <= 0.5) and np.all(centroid > 0.49)
