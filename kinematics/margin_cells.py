@@ -39,6 +39,7 @@ own units, positions in the pose's (mm, cm or rad), cell offsets in cell widths.
 from __future__ import annotations
 
 import itertools
+import math
 
 import numpy as np
 
@@ -65,6 +66,11 @@ def boundary_band(inside: np.ndarray) -> np.ndarray:
     return np.nonzero((some & ~every).ravel())[0]
 
 
+def flat_strides(shape: tuple[int, ...]) -> np.ndarray:
+    """The flat-index strides (int64, one per axis) of a C-ordered grid of ``shape``."""
+    return np.array([math.prod(shape[j + 1 :]) for j in range(len(shape))], dtype=np.int64)
+
+
 class NodeMargins:
     """The margins (K + 1 columns) of every grid node: the mechanism's reachability margins
     (``reach``, computed with the fine pass) and the dexterity margin ``ic^2 - min_ic^2`` (``ic``
@@ -77,8 +83,8 @@ class NodeMargins:
         Row ``n`` the margins of flat node ``n``; the last row all NaN (a node off the grid).
     shape : tuple of int
         The grid's shape.
-    strides : list of int
-        Flat-index strides of the grid's axes.
+    strides : ndarray of int64
+        Flat-index strides of the grid's axes (:func:`flat_strides`).
     """
 
     def __init__(self, reach: np.ndarray, ic: np.ndarray, min_ic: float):
@@ -88,7 +94,7 @@ class NodeMargins:
         self.table[:-1, :-1] = reach
         self.table[:-1, -1] = ic.ravel() ** 2 - min_ic**2
         self.table[-1] = np.nan
-        self.strides = [int(np.prod(ic.shape[j + 1 :])) for j in range(ic.ndim)]
+        self.strides = flat_strides(ic.shape)
 
 
 @kernels.inline_jit
@@ -198,7 +204,7 @@ def linear_margins(
     at, slope = _node_linear_margins(
         margins.table,
         np.asarray(margins.shape, dtype=np.int64),
-        np.asarray(margins.strides, dtype=np.int64),
+        margins.strides,
         np.ascontiguousarray(nodes, dtype=np.int64),
         np.asarray(sampled, dtype=np.int64),
     )
@@ -206,7 +212,7 @@ def linear_margins(
     row_of[nodes] = np.arange(nodes.size)
     if secants is not None:
         _secants(at, slope, row_of, secants)
-    _borrow_dexterity(at, slope, margins.table[nodes, -1], row_of, nodes, margins.shape, sampled)
+    _borrow_dexterity(at, slope, margins, row_of, nodes, sampled)
     return at, slope
 
 
@@ -220,17 +226,15 @@ def _neighbour_offsets(d: int) -> np.ndarray:
 def _borrow_dexterity(
     at: np.ndarray,
     slope: np.ndarray,
-    table_dexterity: np.ndarray,
+    margins: NodeMargins,
     row_of: np.ndarray,
     nodes: np.ndarray,
-    shape: tuple,
     sampled: list[int],
 ) -> None:
     """The dexterity margin (last column, in place) of the nodes where it is still unknown (its
     node and face neighbours unreachable: a corner of the workspace reaches into its cell), the
     linear model of the nearest neighbour among ``nodes`` (26 in 3-D, the face ones first) whose
-    own value is known (``table_dexterity``, per node of ``nodes``: not one extrapolated from its
-    face neighbours, whose slopes may be 0 where they had none), continued to the node; it then
+    own value is known (in ``margins.table``: not one extrapolated from its face neighbours, whose slopes may be 0 where they had none), continued to the node; it then
     bounds the cell's part too, as every margin does. Why: the part of such a cell kept
     1/kappa = 0, an under-count of the GDI by the share of V in these parts (0.2 % of the
     Gough-Stewart's at 22 per axis, 0.05 % of the Tricept's), where the rule's cells elsewhere
@@ -240,27 +244,23 @@ def _borrow_dexterity(
         _borrowed_dexterity(
             at,
             slope,
-            np.isfinite(table_dexterity),
+            np.isfinite(margins.table[nodes, -1]),
             row_of,
             np.ascontiguousarray(nodes[missing]),
             missing,
-            np.asarray(shape, dtype=np.int64),
+            np.asarray(margins.shape, dtype=np.int64),
+            margins.strides,
             np.asarray(sampled, dtype=np.int64),
             _neighbour_offsets(len(sampled)),
         )
 
 
 @kernels.jit
-def _borrowed_dexterity(at, slope, known, row_of, missing_nodes, missing, shape, sampled, offsets):
+def _borrowed_dexterity(at, slope, known, row_of, missing_nodes, missing, shape, strides, sampled, offsets):
     """:func:`_borrow_dexterity`'s loop, compiled: per missing row the offsets in order, the
     first neighbour (a row of ``at``) whose own dexterity margin is ``known``."""
     c = at.shape[1] - 1
     d = sampled.shape[0]
-    strides = np.empty(shape.shape[0], dtype=np.int64)
-    stride = 1
-    for j in range(shape.shape[0] - 1, -1, -1):
-        strides[j] = stride
-        stride *= shape[j]
     for i in range(missing.shape[0]):
         node = missing_nodes[i]
         for o in range(offsets.shape[0]):
@@ -316,13 +316,11 @@ def cell_means(integrand: np.ndarray, inside: np.ndarray, sampled: list[int]) ->
     value plus 1/24 of its second difference along each sampled axis whose two neighbours are
     inside (the mean of a parabola over a cell of width 1 is its centre value plus ``f''/24``);
     0 outside."""
-    shape = np.asarray(inside.shape, dtype=np.int64)
-    strides = np.asarray([int(np.prod(inside.shape[j + 1 :])) for j in range(inside.ndim)], dtype=np.int64)
     mean = _cell_means(
         np.ascontiguousarray(integrand, dtype=float).ravel(),
         np.ascontiguousarray(inside).ravel(),
-        shape,
-        strides,
+        np.asarray(inside.shape, dtype=np.int64),
+        flat_strides(inside.shape),
         np.asarray(sampled, dtype=np.int64),
     )
     return mean.reshape(inside.shape)

@@ -558,11 +558,7 @@ def _crossings(
         reach = values.margins(ends)
         reach = np.empty((2 * n, 0)) if reach is None else reach
         dex_in, dex_out = _dexterity_margin(ic_in, limit), _dexterity_margin(ic_out, limit)
-        linear, refined = (
-            (_linear_crossing_compiled, _refined_crossing_compiled)
-            if kernels.compiled()
-            else (_linear_crossing, _refined_crossing)
-        )
+        linear = _linear_crossing_compiled if kernels.compiled() else _linear_crossing
         first = linear(np.ascontiguousarray(reach), dex_in, dex_out)
         look = np.nonzero(np.isfinite(first))[0]
         t1 = first[look]
@@ -574,7 +570,9 @@ def _crossings(
             ic_1 = np.full(look.size, np.nan)
         reach_1 = values.margins(at) if reach.shape[1] else np.empty((look.size, 0))
         dex_1 = _dexterity_margin(ic_1, limit)
-        t2, which = refined(reach, np.ascontiguousarray(reach_1), dex_in, dex_1, dex_out, look, t1)
+        t2, which = _first_root(
+            _margin_roots(reach, np.ascontiguousarray(reach_1), dex_in, dex_1, dex_out, look, t1), t1
+        )
         if start.shape[0]:
 
             def edge(rows: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -601,7 +599,6 @@ def _crossings(
             if curved.size:
                 t2[curved], weight_1[curved] = _dexterity_parabola(
                     values,
-                    refined,
                     *edge(curved),
                     t_look[curved],
                     t2[curved],
@@ -626,7 +623,6 @@ def _crossings(
 
 def _dexterity_parabola(
     values: _PointValues,
-    refined: Callable,
     at: np.ndarray,
     column: np.ndarray,
     p_in: np.ndarray,
@@ -641,10 +637,10 @@ def _dexterity_parabola(
     unknown at the outside end (unreachable there): it was placed on the line through its
     values at the inside end (``dex_in``) and at ``t1`` (``dex_1``), at ``t2`` (fractions of the
     way from ``p_in`` to ``p_out`` (M,) along column ``column`` (M,) of the poses ``at``
-    (M, dof)). A look at ``t2``, and the parabola through the three values (``refined`` on the
-    edge from the inside end to the farther look, the nearer one the middle point: ``t2`` lies
-    beyond ``t1`` where the margin is still positive there), its root in the bracket where they
-    change sign.
+    (M, dof)). A look at ``t2``, and the parabola through the three values
+    (:func:`_margin_roots` on the edge from the inside end to the farther look, the nearer one the
+    middle point: ``t2`` lies beyond ``t1`` where the margin is still positive there), its root in
+    the bracket where they change sign.
 
     Why: where the outside end is reachable its margin is known and the crossing lies on the
     parabola through three values; as that end turned unreachable the line took over, and the
@@ -666,7 +662,9 @@ def _dexterity_parabola(
     middle, dex_middle = np.where(beyond, t1, t2), np.where(beyond, dex_1, dex_2)
     dex_far = np.where(beyond, dex_2, dex_1)
     no_reach = np.empty((2 * t2.size, 0))
-    share, found = refined(no_reach, np.empty((t2.size, 0)), dex_in, dex_middle, dex_far, rows, middle / far)
+    share, found = _first_root(
+        _margin_roots(no_reach, np.empty((t2.size, 0)), dex_in, dex_middle, dex_far, rows, middle / far), middle / far
+    )
     crossing = np.where(found == 0, share * far, t2)
     return crossing, np.where(np.isfinite(ic_2), weight_2, weight_1)
 
@@ -731,7 +729,7 @@ def _second_look(
     dex_look = _dexterity_margin(ic, values.min_ic)
     with np.errstate(invalid="ignore", divide="ignore"):
         s = t_look * dex_in / (dex_in - dex_look)
-    # the line's root beyond the look too (a margin still positive there), as refined's line
+    # the line's root beyond the look too (a margin still positive there), as _margin_roots' line
     # does: at dex_look = 0 it is the look itself from either side
     first = np.nonzero((dex_look < dex_in) & (dex_in >= 0.0) & (s >= 0.0) & (s <= t2))[0]
     t2, which = t2.copy(), which.copy()
@@ -775,7 +773,7 @@ def _linear_crossing(reach: np.ndarray, dex_in: np.ndarray, dex_out: np.ndarray)
     return np.where(usable, np.clip(first, 0.0, 1.0), np.nan)
 
 
-def _refined_crossing(
+def _margin_roots(
     reach: np.ndarray,
     reach_mid: np.ndarray,
     dex_in: np.ndarray,
@@ -783,15 +781,16 @@ def _refined_crossing(
     dex_out: np.ndarray,
     rows: np.ndarray,
     tm: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> np.ndarray:
     """Step 2 of :func:`_crossings` on the ``rows`` (M,) of :func:`_linear_crossing`'s arrays, with
     the margins ``reach_mid`` (M, K), ``dex_mid`` (M,) at ``tm`` (M,), the fraction of step 1:
     each margin as the parabola through its three values, its first root in the bracket where
     the three values change sign (``[0, tm]`` where it is negative at ``tm``, else ``[tm, 1]``
     where it is negative at the outside end; none where it is negative at none of them); the
-    line through the first two where the outside end's is unknown. Returns the root (``tm``
-    where no margin has one) and the column of the first margin (K: the dexterity margin; -1:
-    none).
+    line through the first two where the outside end's is unknown. Returns each margin's root
+    (M, K + 1; inf: none; column K the dexterity margin); the first of them is the crossing
+    (:func:`_first_root`). Compiled (:func:`_margin_roots_compiled`) unless
+    ``PM_DESIGN_KERNELS=numpy``.
 
     Why brackets: a margin positive at all three points has no root there to the accuracy of
     the samples, and a parabola through them can still dip below zero: where a margin is not
@@ -802,26 +801,8 @@ def _refined_crossing(
     negative it goes to ``tm`` as the middle value goes to zero, from either side. A margin that
     only touches zero at ``tm`` (an outside pocket opening in the middle of the edge) still moves
     the first crossing by a jump, as the first boundary along the edge itself does."""
-    roots = _margin_roots(reach, reach_mid, dex_in, dex_mid, dex_out, rows, tm)
-    which = np.argmin(roots, axis=1)
-    first = roots[np.arange(roots.shape[0]), which]
-    found = np.isfinite(first)
-    return np.where(found, first, tm), np.where(found, which, -1)
-
-
-def _margin_roots(
-    reach: np.ndarray,
-    reach_mid: np.ndarray,
-    dex_in: np.ndarray,
-    dex_mid: np.ndarray,
-    dex_out: np.ndarray,
-    rows: np.ndarray,
-    tm: np.ndarray,
-) -> np.ndarray:
-    """Each margin's root (M, K + 1; inf: none) of :func:`_refined_crossing` (its arguments), the
-    first of which is the crossing: the parabola through its three values, its root in the
-    bracket where they change sign (the line through the first two where the outside end's is
-    unknown)."""
+    if kernels.compiled():
+        return _margin_roots_compiled(reach, reach_mid, dex_in, dex_mid, dex_out, rows, tm)
     n = dex_in.size
     g0 = _stacked(reach[:n][rows], dex_in[rows])
     g1 = _stacked(reach[n:][rows], dex_out[rows])
@@ -877,10 +858,20 @@ def _linear_crossing_compiled(reach, dex_in, dex_out):
     return out
 
 
+def _first_root(roots: np.ndarray, tm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The crossing of each row of :func:`_margin_roots` ``roots`` (M, K + 1): the first root (the
+    first margin on a tie; ``tm`` (M,) where no margin has one) and its column (K: the dexterity
+    margin; -1: none)."""
+    which = np.argmin(roots, axis=1)
+    first = roots[np.arange(roots.shape[0]), which]
+    found = np.isfinite(first)
+    return np.where(found, first, tm), np.where(found, which, -1)
+
+
 @kernels.inline_jit
 def _margin_root(a, mid, b, t):
-    """One margin's root of :func:`_refined_crossing_compiled` (its values ``a``, ``mid``, ``b``
-    at the inside end, at ``t`` and at the outside end; inf: none), as :func:`_margin_roots`."""
+    """One margin's root of :func:`_margin_roots_compiled` (its values ``a``, ``mid``, ``b`` at
+    the inside end, at ``t`` and at the outside end; inf: none), as :func:`_margin_roots`."""
     if np.isnan(mid) or np.isnan(a):
         return np.inf
     if np.isnan(b) or t <= 0.0 or t >= 1.0:
@@ -921,28 +912,6 @@ def _margin_roots_compiled(reach, reach_mid, dex_in, dex_mid, dex_out, rows, tm)
             b = reach[n + r, c] if c < k else dex_out[r]
             roots[q, c] = _margin_root(a, mid, b, tm[q])
     return roots
-
-
-@kernels.vector_jit
-def _refined_crossing_compiled(reach, reach_mid, dex_in, dex_mid, dex_out, rows, tm):
-    """:func:`_refined_crossing`, one row at a time (the same operations): the first of
-    :func:`_margin_roots_compiled`'s roots per row (the first margin on a tie)."""
-    roots = _margin_roots_compiled(reach, reach_mid, dex_in, dex_mid, dex_out, rows, tm)
-    m = rows.shape[0]
-    first = np.empty(m)
-    which = np.empty(m, dtype=np.int64)
-    for q in range(m):
-        best = np.inf
-        best_c = -1
-        for c in range(roots.shape[1]):
-            if roots[q, c] < best:
-                best = roots[q, c]
-                best_c = c
-        if best < np.inf:
-            first[q], which[q] = best, best_c
-        else:
-            first[q], which[q] = tm[q], -1
-    return first, which
 
 
 def _dexterity_fraction(ic_in: np.ndarray, ic_out: np.ndarray, limit: float) -> np.ndarray:
@@ -1647,7 +1616,7 @@ def _margin_secants(
         dexterity margin).
     """
     flat_inside = np.ascontiguousarray(inside.ravel())
-    strides = np.array([margins.strides[j] for j in sampled], dtype=np.int64)
+    strides = margins.strides[sampled]
     sizes = np.array([inside.shape[j] for j in sampled], dtype=np.int64)
     axis, lower = _cut_edges(flat_inside, strides, sizes)
     if not axis.size:
@@ -1670,9 +1639,8 @@ def _margin_secants(
     at[rows, column] += towards * t1 * widths[axis[look]]
     reach_1 = values.margins(at)
     _, _, ic_1, _ = values(at)
-    margin_roots = _margin_roots_compiled if kernels.compiled() else _margin_roots
     reach = np.ascontiguousarray(np.vstack([g_in[:, :k], g_out[:, :k]]))
-    roots = margin_roots(
+    roots = _margin_roots(
         reach,
         np.ascontiguousarray(reach_1),
         np.ascontiguousarray(g_in[:, k]),
@@ -1713,7 +1681,7 @@ def _sparse_crossings(
     shape = inside.shape
     flat_inside = np.ascontiguousarray(inside.ravel())
     f0, f1 = np.ascontiguousarray(f0.ravel()), np.ascontiguousarray(f1.ravel())
-    strides = np.array([math.prod(shape[j + 1 :]) for j in sampled], dtype=np.int64)
+    strides = margin_cells.flat_strides(shape)[sampled]
     sizes = np.array([shape[j] for j in sampled], dtype=np.int64)
     positions = np.zeros((len(sampled), int(sizes.max()) + 2))
     for k, j in enumerate(sampled):  # the face, the nodes, the face

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
 import pytest
 
-from kinematics import MECHANISMS, get_mechanism
+from kinematics import MECHANISMS, get_mechanism, kernels
 from kinematics.annuli import annuli_intersection_area, discs_intersection_area, lens_area
 from kinematics.workspace import Evaluation, evaluate, membership
 from tests.conftest import PAPER_DESIGNS
@@ -257,10 +258,11 @@ def test_a_crossing_next_to_a_margin_that_is_zero_at_the_inside_end(compiled):
     def margin(s):
         return -4.0 * s * (s - 0.5)
 
-    crossing = workspace._refined_crossing_compiled if compiled else workspace._refined_crossing
     reach = np.array([[margin(0.0)], [margin(1.0)]])  # (2 n, K): inside ends, then outside ends
     ok = np.ones(1)  # a dexterity margin positive everywhere
-    first, which = crossing(reach, np.array([[margin(0.25)]]), ok, ok, ok, np.array([0]), np.array([0.25]))
+    with contextlib.nullcontext() if compiled else kernels.reference_kernels():
+        roots = workspace._margin_roots(reach, np.array([[margin(0.25)]]), ok, ok, ok, np.array([0]), np.array([0.25]))
+        first, which = workspace._first_root(roots, np.array([0.25]))
     assert first[0] == pytest.approx(0.5, abs=1e-15) and which[0] == 0
 
 
