@@ -38,6 +38,7 @@ own units, positions in the pose's (mm, cm or rad), cell offsets in cell widths.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 
@@ -216,11 +217,14 @@ def linear_margins(
     return at, slope
 
 
+@functools.cache
 def _neighbour_offsets(d: int) -> np.ndarray:
     """The 3^d - 1 offsets (rows, in nodes) to a node's neighbours along d sampled axes, the
     nearest first (face, then edge, then corner neighbours), each group in lexicographic order."""
     offsets = [o for o in itertools.product((-1, 0, 1), repeat=d) if any(o)]
-    return np.array(sorted(offsets, key=lambda o: sum(abs(v) for v in o)), dtype=np.int64)
+    table = np.array(sorted(offsets, key=lambda o: sum(abs(v) for v in o)), dtype=np.int64)
+    table.setflags(write=False)  # cached: shared by every call
+    return table
 
 
 def _borrow_dexterity(
@@ -297,18 +301,42 @@ def _secants(
     """The secants of :func:`linear_margins` into ``slope`` (in place). Where one margin vanishes
     on both sides of a node along one axis (a margin with a ridge between them), the nearer
     crossing's secant: the better slope over the node's cell, and one answer whatever the order of
-    the crossings (an assignment to one entry twice keeps either)."""
+    the crossings (of two at the same distance, the first in ``secants``' order)."""
     node, axis, distance, column = secants
-    rows = row_of[node]
-    keep = (rows >= 0) & (np.abs(distance) > 1e-9)
-    rows, axis, distance, column = rows[keep], axis[keep], distance[keep], column[keep]
-    defined = np.isfinite(at[rows, column])
-    rows, axis, distance, column = rows[defined], axis[defined], distance[defined], column[defined]
-    entry = (rows * slope.shape[1] + column) * slope.shape[2] + axis
-    order = np.lexsort((np.abs(distance), entry))  # by entry, the nearest crossing first
-    first = order[np.r_[True, entry[order][1:] != entry[order][:-1]]]
-    rows, axis, distance, column = rows[first], axis[first], distance[first], column[first]
-    slope[rows, column, axis] = -at[rows, column] / distance
+    _nearest_secants(
+        at,
+        slope,
+        row_of,
+        np.ascontiguousarray(node, dtype=np.int64),
+        np.ascontiguousarray(axis, dtype=np.int64),
+        np.ascontiguousarray(distance, dtype=float),
+        np.ascontiguousarray(column, dtype=np.int64),
+    )
+
+
+@kernels.jit
+def _nearest_secants(at, slope, row_of, node, axis, distance, column):
+    """:func:`_secants`' loop, compiled: per (row, margin, axis) entry of ``slope`` the secant
+    ``-at / distance`` of the nearest crossing seen from a band node (``row_of`` >= 0) where the
+    margin is defined and the crossing is not at the node (``|distance| > 1e-9`` cell widths).
+    Why compiled: the sort that picked the nearest per entry cost the Tricept a tenth of its
+    evaluation."""
+    m, count, d = slope.shape
+    nearest = np.empty((m, count, d))  # set where a secant lands only: most entries have none
+    for i in range(node.shape[0]):
+        row = row_of[node[i]]
+        if row >= 0:
+            nearest[row, column[i], axis[i]] = np.inf
+    for i in range(node.shape[0]):
+        row = row_of[node[i]]
+        if row < 0 or not abs(distance[i]) > 1e-9:
+            continue
+        c, k = column[i], axis[i]
+        value = at[row, c]
+        if not np.isfinite(value) or not abs(distance[i]) < nearest[row, c, k]:
+            continue
+        nearest[row, c, k] = abs(distance[i])
+        slope[row, c, k] = -value / distance[i]
 
 
 def cell_means(integrand: np.ndarray, inside: np.ndarray, sampled: list[int]) -> np.ndarray:
