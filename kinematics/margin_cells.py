@@ -265,14 +265,17 @@ def _borrowed_dexterity(at, slope, known, row_of, missing_nodes, missing, shape,
     first neighbour (a row of ``at``) whose own dexterity margin is ``known``."""
     c = at.shape[1] - 1
     d = sampled.shape[0]
+    coordinates = np.empty(d, dtype=np.int64)
     for i in range(missing.shape[0]):
         node = missing_nodes[i]
+        for k in range(d):  # once per node: an integer division per offset and axis cost 2/3 of the loop
+            coordinates[k] = (node // strides[sampled[k]]) % shape[sampled[k]]
         for o in range(offsets.shape[0]):
             there = node
             inside_grid = True
             for k in range(d):
                 j = sampled[k]
-                coordinate = (node // strides[j]) % shape[j] + offsets[o, k]
+                coordinate = coordinates[k] + offsets[o, k]
                 if coordinate < 0 or coordinate >= shape[j]:
                     inside_grid = False
                     break

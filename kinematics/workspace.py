@@ -2006,14 +2006,16 @@ def _integrate_grid(
     inside, weight, ic = (np.concatenate(k) for k in zip(*parts))
     vals = ic[inside]
     n_inside = int(inside.sum())
-    f0, f1 = _integrands(inside, weight, ic)
     if sampled and margins:
-        node_margins = margin_cells.NodeMargins(np.concatenate(reach), ic.reshape(shape), values.min_ic)
+        node_margins = margin_cells.NodeMargins(
+            reach[0] if len(reach) == 1 else np.concatenate(reach), ic.reshape(shape), values.min_ic
+        )
         secants = _margin_secants(values, axes, sampled, node_margins, inside.reshape(shape))
         weight_sum, ic_sum = margin_cells.margin_cell_sums(
             node_margins, sampled, inside.reshape(shape), ic.reshape(shape), secants, values.min_ic
         )
     elif sampled:
+        f0, f1 = _integrands(inside, weight, ic)
         weight_sum, ic_sum = _boundary_corrected_sums(
             values,
             axes,
@@ -2026,6 +2028,7 @@ def _integrate_grid(
             ic.reshape(shape),
         )
     else:
+        f0, f1 = _integrands(inside, weight, ic)
         weight_sum, ic_sum = float(f0.sum()), float(f1.sum())
     volume = weight_sum * cell
     stats = (
