@@ -126,3 +126,32 @@ def test_every_part_of_a_band_cell_has_a_dexterity_model(monkeypatch):
     parts = seen["fraction"] > 0
     assert parts.sum() > 1000
     assert np.isfinite(seen["level"][parts, -1]).all()
+
+
+def test_a_margin_vanishing_on_both_sides_takes_the_nearer_secant_whatever_the_order():
+    """``_secants``: per (node, margin, axis) the secant of the nearest crossing; crossings at the
+    node (|distance| <= 1e-9), off the band and where the margin is undefined are skipped; of two
+    at the same distance the first given."""
+    from kinematics.margin_cells import _secants
+
+    at = np.array([[1.0, np.nan], [2.0, 4.0]])
+    row_of = np.array([0, -1, 1])  # node 1 is not in the band
+    # (node, axis, distance, column): node 0 margin 0 axis 0 from +0.5 and -0.25, node 2 margin 1
+    # axis 1 at 0.5 twice, a crossing at node 0 itself, one off the band, one on an undefined margin
+    secants = [
+        (0, 0, 0.5, 0),
+        (0, 0, -0.25, 0),
+        (2, 1, 0.5, 1),
+        (2, 1, -0.5, 1),
+        (0, 1, 1e-12, 0),
+        (1, 0, 0.5, 0),
+        (0, 0, 0.5, 1),
+    ]
+    for order in (secants, secants[::-1]):
+        node, axis, distance, column = (np.array(v) for v in zip(*order))
+        slope = np.zeros((2, 2, 2))
+        _secants(at, slope, row_of, (node, axis, distance.astype(float), column))
+        assert slope[0, 0, 0] == -1.0 / -0.25  # the nearer of +0.5 and -0.25
+        assert slope[1, 1, 1] == (-4.0 / 0.5 if order is secants else -4.0 / -0.5)  # a tie: the first
+        assert slope[0, 0, 1] == 0.0 and slope[0, 1, 0] == 0.0  # at the node; undefined margin
+        assert np.count_nonzero(slope) == 2

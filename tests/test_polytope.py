@@ -150,3 +150,22 @@ def test_a_plane_through_the_node_and_a_tiny_corner_stay_finite_and_in_the_cell(
         assert fraction[0] == pytest.approx(0.5) and np.all(np.abs(centroid) <= 0.5)
     fraction, centroid = clipped_cell(np.array([[-1.49999]]), g)  # the corner u = (1/2, 1/2, 1/2)
     assert 0.0 < fraction[0] < 1e-6 and np.all(np.abs(centroid) <= 0.5) and np.all(centroid > 0.49)
+
+
+def test_the_new_face_s_pseudo_angle_sorts_as_atan2() -> None:
+    """The clipper orders a new face's points by a pseudo-angle instead of ``atan2`` (cheaper); the
+    order, and with it the face's first vertex (the fan's apex), must be atan2's: random vectors,
+    the axes and the diagonals, both signs of each, the origin."""
+    from kinematics.polytope import _pseudo_angle
+
+    rng = np.random.default_rng(3)
+    points = np.vstack(
+        [
+            rng.normal(size=(2000, 2)) * rng.choice([1e-8, 1.0, 1e8], (2000, 1)),
+            [[1, 0], [0, 1], [-1, 0], [0, -1], [1, 1], [-1, 1], [-1, -1], [1, -1], [0, 0], [-1, 1e-300]],
+        ]
+    )
+    pseudo = np.array([_pseudo_angle.py_func(x, y) for x, y in points])
+    exact = np.arctan2(points[:, 1], points[:, 0])
+    assert np.all((pseudo >= -2.0) & (pseudo <= 2.0))
+    np.testing.assert_array_equal(np.argsort(pseudo, kind="stable"), np.argsort(exact, kind="stable"))
