@@ -1527,26 +1527,40 @@ def _cut_cell_corrections(
 def _cut_edges(inside, strides, sizes):
     """The grid edges whose two nodes differ in membership: per sampled axis k (flat index
     ``(outer * sizes[k] + c) * strides[k] + inner``) the edges from layer c to c + 1, as
-    ``(axis, lower node)`` arrays in the order of the axes, then of the lower node. One pass
-    per axis over the nodes, nested loops (no division per node)."""
+    ``(axis, lower node)`` arrays in the order of the axes, then of the lower node.
+
+    Per axis the differences of the layers, one byte per node (contiguous runs, which LLVM
+    vectorises), then the nodes read out eight at a time, a run of eight without a cut skipped
+    by one test: few edges are cut (about 3 % of a grid's on the Delta), and a test per node
+    cost 7x the time."""
     d = strides.shape[0]
     n = inside.shape[0]
+    bits = inside.view(np.uint8)
+    words = -(-n // 8)
+    diff = np.zeros((d, 8 * words), dtype=np.uint8)  # 1 at the lower node of a cut edge
     count = 0
     for k in range(d):
         stride, size = strides[k], sizes[k]
+        length = (size - 1) * stride  # the edges of one block of the axis
         for start in range(0, n, size * stride):
-            for p in range(start, start + (size - 1) * stride):
-                count += inside[p] != inside[p + stride]
+            lo, hi = bits[start : start + length], bits[start + stride : start + stride + length]
+            out = diff[k, start : start + length]
+            cut = 0
+            for q in range(length):
+                out[q] = lo[q] ^ hi[q]
+                cut += out[q]
+            count += cut
     axis = np.empty(count, dtype=np.int64)
     lower = np.empty(count, dtype=np.int64)
     i = 0
     for k in range(d):
-        stride, size = strides[k], sizes[k]
-        for start in range(0, n, size * stride):
-            for p in range(start, start + (size - 1) * stride):
-                if inside[p] != inside[p + stride]:
-                    axis[i], lower[i] = k, p
-                    i += 1
+        packed = diff[k].view(np.uint64)
+        for w in range(words):
+            if packed[w] != 0:
+                for p in range(8 * w, 8 * w + 8):
+                    if diff[k, p]:
+                        axis[i], lower[i] = k, p
+                        i += 1
     return axis, lower
 
 
