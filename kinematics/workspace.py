@@ -1906,28 +1906,22 @@ def _occupied_box(
     lo, hi = box[0].astype(float).copy(), box[1].astype(float).copy()
     if not reachable.any():
         return lo, hi
-    jobs = []  # (axis, side, probes, p_in, p_out)
+    # the reachable nodes (C order) and their poses, once: each job takes the ones of its layer
+    index = np.nonzero(reachable)
+    reachable_poses = _node_poses(axes, list(index))
+    jobs = []  # (axis, side, rows of reachable_poses, p_in, p_out)
     for j in sampled:
-        other = tuple(k for k in range(len(shape)) if k != j)
-        layers = np.nonzero(reachable.any(axis=other))[0]
-        for side, layer, beyond in (("lo", layers[0], layers[0] - 1), ("hi", layers[-1], layers[-1] + 1)):
+        coordinate = index[j]
+        first, last = int(coordinate.min()), int(coordinate.max())
+        for side, layer, beyond in (("lo", first, first - 1), ("hi", last, last + 1)):
             if beyond < 0 or beyond >= shape[j]:
                 continue  # the workspace reaches the end layer: keep the face
-            idx = list(np.nonzero(np.take(reachable, [layer], axis=j)))
-            idx[j] = np.full(idx[0].size, layer)
-            jobs.append(
-                (
-                    j,
-                    side,
-                    _node_poses(axes, idx),
-                    np.full(idx[0].size, axes[j][layer]),
-                    np.full(idx[0].size, axes[j][beyond]),
-                )
-            )
+            jobs.append((j, side, np.nonzero(coordinate == layer)[0], axes[j][layer], axes[j][beyond]))
     if jobs:
-        probe = np.vstack([job[2] for job in jobs])
-        column = np.concatenate([np.full(job[3].size, job[0]) for job in jobs])
-        p_in, p_out = np.concatenate([job[3] for job in jobs]), np.concatenate([job[4] for job in jobs])
+        sizes = [job[2].size for job in jobs]
+        probe = reachable_poses[np.concatenate([job[2] for job in jobs])]
+        column = np.repeat([job[0] for job in jobs], sizes)
+        p_in, p_out = np.repeat([job[3] for job in jobs], sizes), np.repeat([job[4] for job in jobs], sizes)
         # on the reach margins where the mechanism has them (any crossing of the edge will do: the
         # box is widened by the edge's length; no integrands, so no dexterity margin), by
         # multisection of reachability elsewhere
@@ -1938,8 +1932,8 @@ def _occupied_box(
                 lambda poses: np.isfinite(values(poses)[2]), probe[left], column[left], p_in[left], p_out[left], rounds
             )
         start = 0
-        for j, side, _, p_in, _ in jobs:
-            stop = start + p_in.size
+        for (j, side, *_), size in zip(jobs, sizes):
+            stop = start + size
             step = (float(box[1][j]) - float(box[0][j])) / len(axes[j])
             if side == "lo":
                 lo[j] = max(float(box[0][j]), float(crossing[start:stop].min()) - step)
