@@ -1079,9 +1079,10 @@ def _integrands(inside: np.ndarray, weight: np.ndarray, ic: np.ndarray, count: i
     f0 = np.where(inside, weight, 0.0)
     if count < 2:
         return (f0,)[:count]
-    # 1/kappa only where inside (a fraction of a grid's nodes), and a NaN of an outside pose ignored
+    # 1/kappa only where inside (a fraction of a grid's nodes), where it is finite (the dexterity
+    # test: above the limit, or finite without one), so an outside pose's NaN never enters
     f1 = np.zeros(np.shape(inside))
-    f1[inside] = weight[inside] * np.nan_to_num(ic[inside])
+    f1[inside] = weight[inside] * ic[inside]
     return f0, f1
 
 
