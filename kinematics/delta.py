@@ -320,7 +320,12 @@ def _elbow_out(a, b, c, rho):
     ratio = c / rho if rho > 0.0 else np.nan
     if not abs(ratio) <= 1.0:
         return np.nan
-    return (math.atan2(b, a) - math.acos(ratio) + math.pi) % (2.0 * math.pi) - math.pi
+    shifted = math.atan2(b, a) - math.acos(ratio) + math.pi
+    # fmod is exact, so an angle already in [0, 2 pi) is its own remainder: the wrap of
+    # _inverse without the cost of the floor modulo for nearly every angle
+    if not 0.0 <= shifted < 2.0 * math.pi:
+        shifted = shifted % (2.0 * math.pi)
+    return shifted - math.pi
 
 
 @kernels.jit
@@ -334,17 +339,31 @@ def _delta_reachable_jacobians(poses, cos_az, sin_az, offset, la, lb, theta_lo, 
     out (no IK, out of range or past the forearm limit)."""
     count = poses.shape[0]
     out = np.empty((count, 3, 3))
+    legs = np.empty((3, 6))  # y_i, u, A, B, C, rho of each leg
     for p in range(count):
         x, y, z = poses[p, 0], poses[p, 1], poses[p, 2]
+        # the tests without trigonometry first, on every leg: most poses of a grid fail one
+        # (the leg cannot close, or the forearm limit), and then no angle is needed
+        out_of_reach = False
         for i in range(3):
             y_leg, u, a, b, c, rho = _delta_leg(x, y, z, cos_az[i], sin_az[i], offset, la, lb)
-            theta = _elbow_out(a, b, c, rho)
-            if not (theta == theta and abs(y_leg) <= max_side):
-                out[p, :, :] = np.nan
+            ratio = c / rho if rho > 0.0 else np.nan
+            if not (abs(ratio) <= 1.0 and abs(y_leg) <= max_side):
+                out_of_reach = True
                 break
-            if not (theta_lo <= theta <= theta_hi):
-                out[p, :, :] = np.nan
-                break
+            legs[i, 0], legs[i, 1], legs[i, 2], legs[i, 3], legs[i, 4], legs[i, 5] = y_leg, u, a, b, c, rho
+        if not out_of_reach:
+            for i in range(3):
+                theta = _elbow_out(legs[i, 2], legs[i, 3], legs[i, 4], legs[i, 5])
+                if not (theta_lo <= theta <= theta_hi):
+                    out_of_reach = True
+                    break
+                legs[i, 2] = theta  # A is not needed past the angle
+        if out_of_reach:
+            out[p, :, :] = np.nan
+            continue
+        for i in range(3):
+            y_leg, u, theta = legs[i, 0], legs[i, 1], legs[i, 2]
             cq, sq = math.cos(theta), math.sin(theta)
             fx = u - la * cq
             fz = z + la * sq

@@ -1079,9 +1079,10 @@ def _integrands(inside: np.ndarray, weight: np.ndarray, ic: np.ndarray, count: i
     f0 = np.where(inside, weight, 0.0)
     if count < 2:
         return (f0,)[:count]
-    # 1/kappa only where inside (a fraction of a grid's nodes), and a NaN of an outside pose ignored
+    # 1/kappa only where inside (a fraction of a grid's nodes), where it is finite (the dexterity
+    # test: above the limit, or finite without one), so an outside pose's NaN never enters
     f1 = np.zeros(np.shape(inside))
-    f1[inside] = weight[inside] * np.nan_to_num(ic[inside])
+    f1[inside] = weight[inside] * ic[inside]
     return f0, f1
 
 
@@ -1527,26 +1528,40 @@ def _cut_cell_corrections(
 def _cut_edges(inside, strides, sizes):
     """The grid edges whose two nodes differ in membership: per sampled axis k (flat index
     ``(outer * sizes[k] + c) * strides[k] + inner``) the edges from layer c to c + 1, as
-    ``(axis, lower node)`` arrays in the order of the axes, then of the lower node. One pass
-    per axis over the nodes, nested loops (no division per node)."""
+    ``(axis, lower node)`` arrays in the order of the axes, then of the lower node.
+
+    Per axis the differences of the layers, one byte per node (contiguous runs, which LLVM
+    vectorises), then the nodes read out eight at a time, a run of eight without a cut skipped
+    by one test: few edges are cut (about 3 % of a grid's on the Delta), and a test per node
+    cost 7x the time."""
     d = strides.shape[0]
     n = inside.shape[0]
+    bits = inside.view(np.uint8)
+    words = -(-n // 8)
+    diff = np.zeros((d, 8 * words), dtype=np.uint8)  # 1 at the lower node of a cut edge
     count = 0
     for k in range(d):
         stride, size = strides[k], sizes[k]
+        length = (size - 1) * stride  # the edges of one block of the axis
         for start in range(0, n, size * stride):
-            for p in range(start, start + (size - 1) * stride):
-                count += inside[p] != inside[p + stride]
+            lo, hi = bits[start : start + length], bits[start + stride : start + stride + length]
+            out = diff[k, start : start + length]
+            cut = 0
+            for q in range(length):
+                out[q] = lo[q] ^ hi[q]
+                cut += out[q]
+            count += cut
     axis = np.empty(count, dtype=np.int64)
     lower = np.empty(count, dtype=np.int64)
     i = 0
     for k in range(d):
-        stride, size = strides[k], sizes[k]
-        for start in range(0, n, size * stride):
-            for p in range(start, start + (size - 1) * stride):
-                if inside[p] != inside[p + stride]:
-                    axis[i], lower[i] = k, p
-                    i += 1
+        packed = diff[k].view(np.uint64)
+        for w in range(words):
+            if packed[w] != 0:
+                for p in range(8 * w, 8 * w + 8):
+                    if diff[k, p]:
+                        axis[i], lower[i] = k, p
+                        i += 1
     return axis, lower
 
 
@@ -1892,28 +1907,22 @@ def _occupied_box(
     lo, hi = box[0].astype(float).copy(), box[1].astype(float).copy()
     if not reachable.any():
         return lo, hi
-    jobs = []  # (axis, side, probes, p_in, p_out)
+    # the reachable nodes (C order) and their poses, once: each job takes the ones of its layer
+    index = np.nonzero(reachable)
+    reachable_poses = _node_poses(axes, list(index))
+    jobs = []  # (axis, side, rows of reachable_poses, p_in, p_out)
     for j in sampled:
-        other = tuple(k for k in range(len(shape)) if k != j)
-        layers = np.nonzero(reachable.any(axis=other))[0]
-        for side, layer, beyond in (("lo", layers[0], layers[0] - 1), ("hi", layers[-1], layers[-1] + 1)):
+        coordinate = index[j]
+        first, last = int(coordinate.min()), int(coordinate.max())
+        for side, layer, beyond in (("lo", first, first - 1), ("hi", last, last + 1)):
             if beyond < 0 or beyond >= shape[j]:
                 continue  # the workspace reaches the end layer: keep the face
-            idx = list(np.nonzero(np.take(reachable, [layer], axis=j)))
-            idx[j] = np.full(idx[0].size, layer)
-            jobs.append(
-                (
-                    j,
-                    side,
-                    _node_poses(axes, idx),
-                    np.full(idx[0].size, axes[j][layer]),
-                    np.full(idx[0].size, axes[j][beyond]),
-                )
-            )
+            jobs.append((j, side, np.nonzero(coordinate == layer)[0], axes[j][layer], axes[j][beyond]))
     if jobs:
-        probe = np.vstack([job[2] for job in jobs])
-        column = np.concatenate([np.full(job[3].size, job[0]) for job in jobs])
-        p_in, p_out = np.concatenate([job[3] for job in jobs]), np.concatenate([job[4] for job in jobs])
+        sizes = [job[2].size for job in jobs]
+        probe = reachable_poses[np.concatenate([job[2] for job in jobs])]
+        column = np.repeat([job[0] for job in jobs], sizes)
+        p_in, p_out = np.repeat([job[3] for job in jobs], sizes), np.repeat([job[4] for job in jobs], sizes)
         # on the reach margins where the mechanism has them (any crossing of the edge will do: the
         # box is widened by the edge's length; no integrands, so no dexterity margin), by
         # multisection of reachability elsewhere
@@ -1924,8 +1933,8 @@ def _occupied_box(
                 lambda poses: np.isfinite(values(poses)[2]), probe[left], column[left], p_in[left], p_out[left], rounds
             )
         start = 0
-        for j, side, _, p_in, _ in jobs:
-            stop = start + p_in.size
+        for (j, side, *_), size in zip(jobs, sizes):
+            stop = start + size
             step = (float(box[1][j]) - float(box[0][j])) / len(axes[j])
             if side == "lo":
                 lo[j] = max(float(box[0][j]), float(crossing[start:stop].min()) - step)
