@@ -314,10 +314,17 @@ def _delta_leg(x, y, z, cos_az, sin_az, offset, la, lb):
 
 
 @kernels.inline_jit
-def _elbow_out(a, b, c, rho):
-    """The elbow-out actuator angle (rad, in [-pi, pi)) of :meth:`Delta._inverse`; NaN where the
-    leg cannot close (``|C| > rho``)."""
-    ratio = c / rho if rho > 0.0 else np.nan
+def _closure_ratio(c, rho):
+    """``C / rho`` of :meth:`Delta._inverse` (NaN where ``rho = 0``): the leg closes where its
+    absolute value is at most 1."""
+    return c / rho if rho > 0.0 else np.nan
+
+
+@kernels.inline_jit
+def _elbow_out(a, b, ratio):
+    """The elbow-out actuator angle (rad, in [-pi, pi)) of :meth:`Delta._inverse` from the leg's
+    ``A``, ``B`` (mm^2) and :func:`_closure_ratio`; NaN where the leg cannot close
+    (``|C| > rho``)."""
     if not abs(ratio) <= 1.0:
         return np.nan
     shifted = math.atan2(b, a) - math.acos(ratio) + math.pi
@@ -339,7 +346,7 @@ def _delta_reachable_jacobians(poses, cos_az, sin_az, offset, la, lb, theta_lo, 
     out (no IK, out of range or past the forearm limit)."""
     count = poses.shape[0]
     out = np.empty((count, 3, 3))
-    legs = np.empty((3, 6))  # y_i, u, A, B, C, rho of each leg
+    legs = np.empty((3, 6))  # y_i, u, A, B, C / rho and theta of each leg
     for p in range(count):
         x, y, z = poses[p, 0], poses[p, 1], poses[p, 2]
         # the tests without trigonometry first, on every leg: most poses of a grid fail one
@@ -347,23 +354,23 @@ def _delta_reachable_jacobians(poses, cos_az, sin_az, offset, la, lb, theta_lo, 
         out_of_reach = False
         for i in range(3):
             y_leg, u, a, b, c, rho = _delta_leg(x, y, z, cos_az[i], sin_az[i], offset, la, lb)
-            ratio = c / rho if rho > 0.0 else np.nan
+            ratio = _closure_ratio(c, rho)
             if not (abs(ratio) <= 1.0 and abs(y_leg) <= max_side):
                 out_of_reach = True
                 break
-            legs[i, 0], legs[i, 1], legs[i, 2], legs[i, 3], legs[i, 4], legs[i, 5] = y_leg, u, a, b, c, rho
+            legs[i, 0], legs[i, 1], legs[i, 2], legs[i, 3], legs[i, 4] = y_leg, u, a, b, ratio
         if not out_of_reach:
             for i in range(3):
-                theta = _elbow_out(legs[i, 2], legs[i, 3], legs[i, 4], legs[i, 5])
+                theta = _elbow_out(legs[i, 2], legs[i, 3], legs[i, 4])
                 if not (theta_lo <= theta <= theta_hi):
                     out_of_reach = True
                     break
-                legs[i, 2] = theta  # A is not needed past the angle
+                legs[i, 5] = theta
         if out_of_reach:
             out[p, :, :] = np.nan
             continue
         for i in range(3):
-            y_leg, u, theta = legs[i, 0], legs[i, 1], legs[i, 2]
+            y_leg, u, theta = legs[i, 0], legs[i, 1], legs[i, 5]
             cq, sq = math.cos(theta), math.sin(theta)
             fx = u - la * cq
             fz = z + la * sq
@@ -388,7 +395,7 @@ def _delta_margins(poses, cos_az, sin_az, offset, la, lb, theta_lo, theta_hi, ma
         x, y, z = poses[p, 0], poses[p, 1], poses[p, 2]
         for i in range(3):
             y_leg, _, a, b, c, rho = _delta_leg(x, y, z, cos_az[i], sin_az[i], offset, la, lb)
-            theta = _elbow_out(a, b, c, rho)
+            theta = _elbow_out(a, b, _closure_ratio(c, rho))
             out[p, i] = rho - c
             out[p, 3 + i] = rho + c
             out[p, 6 + i] = theta - theta_lo
