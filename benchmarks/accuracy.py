@@ -330,7 +330,7 @@ at 20 per axis: its crossings from the nodes' margins and one look per cut edge 
 `1/kappa` only), every node's margins with the fine pass, a closed form where one margin cuts a
 cell, which brought its cost from 2.8x the old default (with the grid method's crossings: three
 looks per cut edge, a membership test and the margins at each crossing again) to about 2.3x, and
-with the compiled nearest secants and one pass per clipped cell to about 1.8x (the table below). The
+with the compiled nearest secants and one pass per clipped cell to about 1.8-1.9x (the table below). The
 GDI's remaining bias is positive (the Tricept's +0.03 to +0.09 %): 1/kappa of a band cell's part
 is the square root of the linear model at the part's centroid, above its mean over the part
 (1/kappa is concave there); with the part's exact mean of the same model (Monte Carlo, measured
@@ -339,7 +339,15 @@ the Gough-Stewart's cell rule too, at 26 per axis (its GDI's misses at 22, -0.15
 parts without a dexterity model, now lent one: 0.04 %). Not yet the Delta's (the table "The
 linear-margins rule" below): its GDI misses at fewer nodes than its default and its boundary
 costs more than its nodes save. The H4's exact axis is not supported. Next: the boundary cells'
-1/kappa integrated over the part rather than taken at its centroid.
+1/kappa integrated over the part rather than taken at its centroid. Measured after the fact
+(`python -m benchmarks.part_means MECH`: the mean of the same linear model over each band part,
+4,000 random points a cell; V unchanged): the Tricept's GDI within 0.042 % on the 16 designs at
+its default (0.089 % at the centroid), and at 18 per axis (5,832 nodes against 8,000) all 16
+within 0.1 % (V 0.089 %, GDI 0.062 %; at the centroid 5 over, GDI 0.124 %); the Gough-Stewart's
+GDI within 0.016 % (0.020 %); the Delta's linear margins at 26 per axis GDI 0.093 % (0.131 %),
+its V still 0.112 % on scan 5. To build it the clipper must give that mean exactly on each of
+its paths (the closed forms of one plane, the clipped polytope's tetrahedra), or the objective
+steps where a cell passes from one path to the other.
 The
 planar mechanisms' sections converge like h^1.5 across (y, phi) (where a section shrinks to
 nothing, its length falls like a square root), irregularly (the 2-RPR's reachable sections

@@ -32,6 +32,7 @@ from pipeline.evaluation import DesignEvaluator
 from pipeline.objectives import objective_values
 from pipeline.optimizers.base import Problem
 from pipeline.optimizers.reference import best_known
+from pipeline.stages.optimise import gap_label
 from pipeline.store.cache import CODE_VERSION
 
 #: the benchmark problems: experiment name -> (mechanism, objective, w_d)
@@ -140,6 +141,15 @@ def save(records: dict) -> None:
 def refined_value(name: str, x: np.ndarray) -> float:
     """The objective of design ``x`` at :data:`REFINE_FACTOR` x its default resolution."""
     return float(make_problem(name, 1, default_resolution_of(name, x) * REFINE_FACTOR)(x[None])[0])
+
+
+def labelled_gap(value: float, error: float, record: dict) -> str:
+    """The gap of a run's ``value`` (its discretisation ``error``, objective units) to the best known
+    ``record``, as the pipeline labels it (:func:`pipeline.stages.optimise.gap_label`, the error of
+    the gap being the two errors' sum): "within error" where the gap is below it, else the gap's
+    percentage with that error."""
+    scale = abs(record["value"])
+    return gap_label((record["value"] - value) / scale, (error + record["error"]) / scale)
 
 
 def adopt(records: dict, name: str, value: float, x: np.ndarray, found_by: str) -> bool:

@@ -389,6 +389,19 @@ def _cell_means(integrand, inside, shape, strides, sampled):
     return mean
 
 
+def part_inverse_condition(
+    at: np.ndarray, slope: np.ndarray, centroid: np.ndarray, fallback: np.ndarray, min_ic: float
+) -> np.ndarray:
+    """1/kappa (dimensionless, (M,)) of each band cell's inside part: the linear dexterity margin
+    ``ic^2 - min_ic^2`` (the last margin of ``at`` (M, K + 1) and ``slope`` (M, K + 1, d), per cell
+    width) at the part's ``centroid`` (M, d; cell units), ``sqrt(margin + min_ic^2)``;
+    ``fallback`` (M,) where the cell has no dexterity model. Why the centroid: one square root a
+    cell; its bias (1/kappa is concave there, the centroid's value above the part's mean) is
+    measured by ``python -m benchmarks.part_means``."""
+    dex = at[:, -1] + np.einsum("md,md->m", slope[:, -1, :], centroid)
+    return np.where(np.isfinite(dex), np.sqrt(np.maximum(dex + min_ic**2, 0.0)), fallback)
+
+
 def margin_cell_sums(
     margins: NodeMargins,
     sampled: list[int],
@@ -422,8 +435,7 @@ def margin_cell_sums(
         return float(inside.sum()), float(cell_means(node_ic, inside, sampled).sum())
     at, slope = linear_margins(margins, sampled, secants, band)
     fraction, centroid = clipped_cell(at, slope)
-    dex = at[:, -1] + np.einsum("md,md->m", slope[:, -1, :], centroid)
-    part_ic = np.where(np.isfinite(dex), np.sqrt(np.maximum(dex + min_ic**2, 0.0)), node_ic.ravel()[band])
+    part_ic = part_inverse_condition(at, slope, centroid, node_ic.ravel()[band], min_ic)
     whole = inside.ravel().copy()
     whole[band] = False
     means = cell_means(node_ic, inside, sampled).ravel()

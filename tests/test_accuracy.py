@@ -684,3 +684,50 @@ def test_the_linear_margins_whole_volume_is_measured_against_the_reference():
     assert label == "default" and nodes == 26**3
     assert code_v == pytest.approx(0.185, abs=0.001)
     assert abs(linear_v) < 0.06 and abs(linear_gdi) < 0.2
+
+
+def test_the_part_means_replacement_is_the_linear_model_s_mean_over_the_part():
+    """``python -m benchmarks.part_means``: its 1/kappa of a band part is the mean of
+    ``sqrt(dexterity margin + limit^2)`` over the part of the cell where every linear margin holds
+    (here a reach margin and the dexterity margin cut one cell; against a 60^3 midpoint rule of the
+    same model), the centroid's value where the part holds too few points, and the fallback where
+    the cell has no dexterity model (as the code's)."""
+    from benchmarks.part_means import monte_carlo_part_means
+    from kinematics import margin_cells
+
+    min_ic = 0.1
+    at = np.array([[0.1, 0.004], [-0.4995, 0.01], [0.2, np.nan]])
+    slope = np.array(
+        [
+            [[1.0, 0.3, -0.2], [0.02, 0.03, 0.0]],
+            [[1.0, 0.0, 0.0], [0.05, 0.0, 0.0]],  # a sliver of 0.05 % of the cell: about 10 points
+            [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],  # no dexterity model: the fallback
+        ]
+    )
+    centroid = np.array([[0.1, 0.0, 0.0], [0.49975, 0.0, 0.0], [0.0, 0.0, 0.0]])
+    fallback = np.array([-1.0, -1.0, 0.123])
+    code = margin_cells.part_inverse_condition(at, slope, centroid, fallback, min_ic)
+    mean = monte_carlo_part_means(20_000)(at, slope, centroid, fallback, min_ic)
+    g = (np.arange(60) + 0.5) / 60 - 0.5
+    u = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
+    m = at[0] + u @ slope[0].T
+    part = (m >= 0).all(axis=1)
+    exact = np.sqrt(m[part, 1] + min_ic**2).mean()
+    assert mean[0] == pytest.approx(exact, rel=2e-3)
+    assert abs(mean[0] - code[0]) > 10 * abs(mean[0] - exact)  # the centroid's value is not the mean
+    assert mean[1] == code[1] and mean[2] == code[2] == 0.123
+
+
+def test_the_part_means_leave_v_and_lower_the_tricept_s_gdi_bias():
+    """``python -m benchmarks.part_means tricept``: V is the code's to the bit (only the parts'
+    1/kappa changes), and the mean over each part takes the GDI's positive bias down (the
+    Tricept's paper design at its default: +0.060 % at the centroid, +0.030 % with the means,
+    4,000 points a cell; here 500), the concavity of 1/kappa along its margin."""
+    from benchmarks.part_means import errors
+    from kinematics import margin_cells
+
+    centroid_values = margin_cells.part_inverse_condition
+    ((code, mean),) = errors(get_mechanism("tricept", **PAPER_DESIGNS["tricept"]), [None], points=500)
+    assert margin_cells.part_inverse_condition is centroid_values  # restored
+    assert mean[0] == code[0]
+    assert 0.0004 < code[1] < 0.0008 and 0.0 < mean[1] < 0.7 * code[1]

@@ -1,0 +1,134 @@
+"""The linear-margins rule's GDI, each band part's 1/kappa at its centroid or its mean over the part.
+
+docs/accuracy.md, "Order": the GDI's remaining bias.
+
+Run: ``python -m benchmarks.part_means tricept [--resolution R ...] [--points N]`` (a mechanism
+with margins and no exact axis). For the designs of ``python -m benchmarks.accuracy`` (the
+ladder's and the scan's) it prints the errors of V, GDI and eta, in % of the reference of
+``benchmarks.accuracy`` (its rule at :data:`benchmarks.accuracy.REFERENCE_FACTOR` x the finer
+default), of ``evaluate(method="margins")`` at each resolution (default: the grid method's
+default), twice:
+
+- **centroid**: the code, :func:`kinematics.margin_cells.part_inverse_condition` (one square root
+  of the linear dexterity margin at the part's centroid);
+- **part mean**: the same run with each band part's 1/kappa the mean of ``sqrt(margin +
+  limit^2)`` over the part, that margin and the part the same linear models the code clips
+  (Monte Carlo: ``--points`` uniform points a cell, default 4,000, the same for every cell,
+  seed 0; a part holding fewer than 20 of them keeps its centroid's value). V is the same in
+  both (the fractions do not change); the difference is the centroid's bias alone.
+
+A measurement after the fact, not a rule of the code: 1/kappa is concave along the dexterity
+margin (a square root), so its value at the centroid is above its mean over the part, a positive
+bias of the GDI. Seeded; no figure is written.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from benchmarks.accuracy import (
+    ERROR_TARGET,
+    METHODS,
+    REFERENCE_FACTOR,
+    SCAN,
+    SCAN_SEED,
+    designs,
+    quantities,
+    random_designs,
+    reference_method,
+)
+from kinematics import MECHANISMS, margin_cells
+from kinematics.workspace import default_resolution, evaluate
+
+#: cells per block of the Monte Carlo means (block x points x margins floats at once)
+BLOCK = 64
+#: fewest sample points inside a part for its Monte Carlo mean
+FEWEST = 20
+
+
+def monte_carlo_part_means(points: int, seed: int = 0):
+    """A replacement for :func:`kinematics.margin_cells.part_inverse_condition` (same signature)
+    whose 1/kappa of a part is the mean of the linear dexterity model over the part, from
+    ``points`` uniform points of the cell (the same for every cell, ``seed``)."""
+    centroid_values = margin_cells.part_inverse_condition
+
+    def means(at, slope, centroid, fallback, min_ic):
+        out = centroid_values(at, slope, centroid, fallback, min_ic)
+        u = np.random.default_rng(seed).random((points, slope.shape[2])) - 0.5
+        # a margin with a non-finite level or slope does not cut the cell (as the clipper takes it)
+        modelled = np.isfinite(at) & np.isfinite(slope).all(axis=2)
+        level = np.where(modelled, at, np.inf)
+        gradient = np.where(modelled[:, :, None], slope, 0.0)
+        cells = np.nonzero(modelled[:, -1])[0]
+        for start in range(0, cells.size, BLOCK):
+            block = cells[start : start + BLOCK]
+            m = level[block, None, :] + np.einsum("pd,mkd->mpk", u, gradient[block])  # (cells, points, K + 1)
+            inside = (m >= 0.0).all(axis=2)
+            ic = np.sqrt(np.maximum(m[:, :, -1] + min_ic**2, 0.0))
+            count = inside.sum(axis=1)
+            mean = (ic * inside).sum(axis=1) / np.maximum(count, 1)
+            out[block] = np.where(count >= FEWEST, mean, out[block])
+        return out
+
+    return means
+
+
+def errors(mech, resolutions: list[int | None], points: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Per resolution, the errors (3: V, GDI, eta; fractions, signed) at the centroid and with the
+    parts' means, against the reference of ``benchmarks.accuracy``."""
+    # the rule first: a mechanism it does not take is refused before the reference is computed
+    codes = [quantities(evaluate(mech, resolution=r, method="margins", error_estimate=False)) for r in resolutions]
+    r0 = max(default_resolution(mech, method=method) for method in METHODS)
+    reference = quantities(
+        evaluate(mech, resolution=REFERENCE_FACTOR * r0, method=reference_method(mech), error_estimate=False)
+    )
+    rows = []
+    for resolution, code in zip(resolutions, codes):
+        centroid_values = margin_cells.part_inverse_condition
+        try:
+            margin_cells.part_inverse_condition = monte_carlo_part_means(points)
+            mean = quantities(evaluate(mech, resolution=resolution, method="margins", error_estimate=False))
+        finally:
+            margin_cells.part_inverse_condition = centroid_values
+        rows.append((code / reference - 1, mean / reference - 1))
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("mechanism")
+    parser.add_argument("--resolution", type=int, nargs="*", default=[], help="nodes per axis (default: the grid's)")
+    parser.add_argument("--points", type=int, default=4000, help="Monte Carlo points a cell (default 4000)")
+    args = parser.parse_args()
+    if args.mechanism not in MECHANISMS:
+        parser.error(f"mechanism={args.mechanism!r} is invalid: allowed {', '.join(sorted(MECHANISMS))}")
+    if args.points < FEWEST:
+        parser.error(f"--points={args.points} is invalid: allowed an integer >= {FEWEST}")
+    if any(r < 4 for r in args.resolution):
+        parser.error(f"--resolution={args.resolution} is invalid: allowed integers >= 4")
+    cases = designs(args.mechanism) + random_designs(args.mechanism, SCAN_SEED, SCAN, "scan")
+    resolutions = args.resolution or [None]
+    try:
+        table = [errors(mech, resolutions, args.points) for _, mech in cases]
+    except ValueError as exc:  # evaluate's one line (e.g. no margins, or an exact axis)
+        raise SystemExit(f"{args.mechanism}: {exc}") from None
+    print(f"{args.mechanism}: errors of V, GDI, eta against the 4x reference, % (method margins)")
+    for k, resolution in enumerate(resolutions):
+        label = "default" if resolution is None else str(resolution)
+        print(f"\nresolution {label}: centroid | part mean ({args.points} points a cell)")
+        for (name, _), rows in zip(cases, table):
+            code, mean = (" ".join(f"{100 * e:+.3f}" for e in row) for row in rows[k])
+            print(f"  {name:10s} {code} | {mean}")
+        for title, j in (("centroid", 0), ("part mean", 1)):
+            worst = np.max([np.abs(rows[k][j]) for rows in table], axis=0)
+            over = sum(bool(np.abs(rows[k][j]).max() > ERROR_TARGET) for rows in table)
+            print(
+                f"  {title:10s} max |error| V {100 * worst[0]:.3f} %, GDI {100 * worst[1]:.3f} %, "
+                f"eta {100 * worst[2]:.3f} %; {over} of {len(table)} designs over {100 * ERROR_TARGET:g} %"
+            )
+
+
+if __name__ == "__main__":
+    main()
