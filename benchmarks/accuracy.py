@@ -201,18 +201,26 @@ is `docs/figures/accuracy_convergence.png`.
    by each margin's plane, in closed form where one margin cuts the cell, as in step 4), so an
    edge where two constraint surfaces meet, a corner and a slab thinner than a cell keep their
    shape, which one plane per cell cannot (the thin-feature limit below). 1/kappa of a band
-   cell's part at its centroid from the linear dexterity margin (`sqrt(m + limit^2)`); of a whole
+   cell's part: the mean over the part of `sqrt(m + limit^2)`, `m` the linear dexterity margin,
+   to second order in its spread, `sqrt(E) max(1 - r/8, (1 + r)^(-1/2))` with `E` the mean of
+   `m + limit^2` over the part (at its centroid) and `r` its variance over `E^2`, the variance
+   exact on every path of the clipper (`kinematics.polytope.clipped_cell_moments`: `|g|^2/12` a
+   whole cell, the tetrahedra of a clipped one, inclusion-exclusion's next powers where one
+   margin cuts it), so that it moves continuously; of a whole
    cell the node's value plus 1/24 of its second differences along the sampled axes whose two
    neighbours are inside (the cell mean of a parabola); where neither a band node nor its face
    neighbours know the dexterity margin (a corner of the workspace reaching into an unreachable
    node's cell), the nearest of its 26 neighbours that does lends its linear model (that part's
    1/kappa was 0 before: the GDI under-counted by the share of V in such parts, 0.2 % on the
    Gough-Stewart at 22 per axis, 0.05 % on the Tricept). Why the Tricept: at 20^3 nodes it is
-   within 0.1 % on every design of the ladder and the scan (at most 0.089 %, the GDI of a scan
-   design; 12 further random designs, seed 8: at most 0.082 %), where one plane per cell needed
+   within 0.1 % on every design of the ladder and the scan (at most 0.077 %, the V of a
+   documented optimum; 12 further random designs, seed 8: at most 0.082 %, the V of one), where one plane per cell needed
    28^3 and still missed a scan design (0.120 %), at about the cost one plane per cell had at
-   28^3 (the tables below); at 19^3 and 18^3 its GDI misses on 8 and 5 of the 16 designs (up to
-   0.117 % and 0.124 %); it has no step where a slab empties (Continuity). Why the
+   28^3 (the tables below); at 19^3 and 18^3 too (V 0.090 % and 0.089 %, GDI 0.075 % and
+   0.068 % on the 16 designs, `python -m benchmarks.part_means tricept --resolution 19 18`; with
+   the centroid's 1/kappa the GDI missed on 8 and 5 of them), not yet adopted (it would move the
+   tricept_max_volume objective and its best known); it has no step where a slab empties
+   (Continuity). Why the
    Gough-Stewart (its constant-orientation grid; a 6-D grid keeps one plane per cell): at 26^3
    nodes it is within 0.1 % on the 13 designs (at most 0.085 %) at about 1.8x the old default's
    cost, where one plane per cell at 32^3 cost about 2.6x and fewer nodes did not hold (below);
@@ -331,23 +339,20 @@ at 20 per axis: its crossings from the nodes' margins and one look per cut edge 
 cell, which brought its cost from 2.8x the old default (with the grid method's crossings: three
 looks per cut edge, a membership test and the margins at each crossing again) to about 2.3x, and
 with the compiled nearest secants and one pass per clipped cell to about 1.8-1.9x (the table below). The
-GDI's remaining bias is positive (the Tricept's +0.03 to +0.09 %): 1/kappa of a band cell's part
-is the square root of the linear model at the part's centroid, above its mean over the part
-(1/kappa is concave there); with the part's exact mean of the same model (Monte Carlo, measured
-after the fact) the Tricept at 18 per axis is within 0.089 % (0.124 % at the centroid). It is
+GDI's bias was positive (the Tricept's +0.03 to +0.09 %) while 1/kappa of a band cell's part was
+the square root of the linear model at the part's centroid, above its mean over the part (1/kappa
+is concave there, a root towards a singular boundary); with the mean from the part's moments (step
+6) the Tricept's GDI errs by at most 0.049 % (+0.02 to +0.05 %), and agrees with the Monte Carlo
+mean of the same model, each cell its own 4,000 points, within 0.003 % (`python -m
+benchmarks.part_means tricept`; one set of points for every cell gave 0.042 %, its sampling error
+the same in every cell, a bias). It is
 the Gough-Stewart's cell rule too, at 26 per axis (its GDI's misses at 22, -0.15 %, were the
 parts without a dexterity model, now lent one: 0.04 %). Not yet the Delta's (the table "The
 linear-margins rule" below): its GDI misses at fewer nodes than its default and its boundary
-costs more than its nodes save. The H4's exact axis is not supported. Next: the boundary cells'
-1/kappa integrated over the part rather than taken at its centroid. Measured after the fact
-(`python -m benchmarks.part_means MECH`: the mean of the same linear model over each band part,
-4,000 random points a cell; V unchanged): the Tricept's GDI within 0.042 % on the 16 designs at
-its default (0.089 % at the centroid), and at 18 per axis (5,832 nodes against 8,000) all 16
-within 0.1 % (V 0.089 %, GDI 0.062 %; at the centroid 5 over, GDI 0.124 %); the Gough-Stewart's
-GDI within 0.016 % (0.020 %); the Delta's linear margins at 26 per axis GDI 0.093 % (0.131 %),
-its V still 0.112 % on scan 5. To build it the clipper must give that mean exactly on each of
-its paths (the closed forms of one plane, the clipped polytope's tetrahedra), or the objective
-steps where a cell passes from one path to the other.
+costs more than its nodes save (with the parts' means its GDI at 26 errs by 0.090 %, 0.131 %
+before, but its V by 0.112 % on scan 5). The H4's exact axis is not supported. The parts' means
+moved the Gough-Stewart's GDI by 0.004-0.008 % (its largest error 0.020 -> 0.013 %), the
+Tricept's by 0.015-0.053 %; V did not move (bit for bit).
 The
 planar mechanisms' sections converge like h^1.5 across (y, phi) (where a section shrinks to
 nothing, its length falls like a square root), irregularly (the 2-RPR's reachable sections

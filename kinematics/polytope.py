@@ -5,19 +5,21 @@ coordinate the offset from the cell's node divided by the cell width along that 
 is modelled as linear over the cell, ``m_k(u) = level_k + gradient_k . u`` (its value at the
 node and its change per cell width), and the cell's inside part is the intersection of the
 half-spaces ``m_k >= 0``: a convex polytope. This module computes its volume fraction and
-centroid exactly (to rounding), so both are continuous in the levels and gradients: a margin
-whose zero moves across the cell moves the fraction smoothly, with no step where it crosses the
-node.
+centroid exactly (to rounding), and the variance over it of a given linear function
+(:func:`clipped_cell_moments`: the dexterity margin's, for the mean of 1/kappa over the part), so
+all are continuous in the levels and gradients: a margin whose zero moves across the cell moves
+the fraction smoothly, with no step where it crosses the node.
 
-This is the "linear margins" rule of docs/accuracy.md ("Order"), measured by
-``python -m benchmarks.cell_errors MECH DESIGN --candidate``; it is not yet the rule of
-:func:`kinematics.workspace.evaluate`. Unlike one plane per cell, an edge where two constraint
-surfaces meet, a corner and a slab keep their shape.
+This is the "linear margins" rule of docs/accuracy.md ("Order", :mod:`kinematics.margin_cells`:
+the Tricept's and the Gough-Stewart's cell rule), measured by
+``python -m benchmarks.cell_errors MECH DESIGN --candidate``. Unlike one plane per cell, an
+edge where two constraint surfaces meet, a corner and a slab keep their shape.
 
 Method: the cube as a list of convex faces, clipped by each margin's plane in turn
 (Sutherland-Hodgman on every face; the points where the plane cuts the faces, sorted by angle
-about their mean, close the polytope with a new face); then the volume and centroid as the sum
-of the tetrahedra from an inside point to each face's fan of triangles. Planes that miss the
+about their mean, close the polytope with a new face); then the volume, the centroid and the
+function's first and second moments as the sums over the tetrahedra from an inside point to
+each face's fan of triangles. Planes that miss the
 cell are skipped; one that leaves nothing of it ends the cell at fraction 0. Cells of 1 or 2
 axes are the prism of unit height over them (volume = length or area).
 
@@ -278,9 +280,135 @@ def _one_plane(a, gradient, slopes, cut, active, moment):
     return True
 
 
+@kernels.inline_jit
+def _node_side_square(c, h, active, n_active):
+    """``integral of (h . w)^2`` over the node's side of :func:`plane_cut`'s plane, in its frame:
+    ``w`` in ``[0, 1]^n`` over the active axes (``u_j + 1/2``, ``u`` positive towards the plane),
+    the part ``c . w <= B``, ``B = 1 + sum c / 2``; ``h`` (d,) the function's slopes in that frame
+    (inactive axes are not integrated here). Cell volumes; exact, the same two forms as
+    :func:`plane_cut`: the prism (the plane crosses every edge along its steepest axis: the part
+    is the region under a linear height ``tau`` over the others, and the integral the moments of
+    linear functions over a box) or inclusion-exclusion, ``(1/2) d^2/dt^2`` of
+    ``int (B - (c + t h) . w)_+^2 dw = 2 sum_v (-1)^|v| (B - c . v)_+^(n+2) / ((n+2)! prod c)``."""
+    top_axis = active[0]
+    for a in range(1, n_active):
+        if c[active[a]] > c[top_axis]:
+            top_axis = active[a]
+    top = c[top_axis]
+    others = 0.0
+    for a in range(n_active):
+        j = active[a]
+        if j != top_axis:
+            others += c[j]
+    if top >= 2.0 + others:
+        # x = w - 1/2 over the base, uniform: E[x] = 0, E[x^2] = 1/12, odd moments 0
+        tau = 1.0 / top + 0.5
+        q = 0.0
+        bb = ab = aa = 0.0
+        for a in range(n_active):
+            j = active[a]
+            if j != top_axis:
+                beta = -c[j] / top
+                q += 0.5 * h[j]
+                bb += beta * beta / 12.0
+                ab += h[j] * beta / 12.0
+                aa += h[j] * h[j] / 12.0
+        ht = h[top_axis]
+        cube = tau**3 + 3.0 * tau * bb
+        q_tau2 = q * tau * tau + q * bb + 2.0 * tau * ab
+        q2_tau = q * q * tau + tau * aa + 2.0 * q * ab
+        return q2_tau + ht * q_tau2 + ht * ht * cube / 3.0
+    bound = 1.0
+    scale = 1.0
+    r1 = 0.0
+    r2 = 0.0
+    for a in range(n_active):
+        j = active[a]
+        bound += 0.5 * c[j]
+        scale *= c[j] * (a + 1)  # n! prod c
+        r1 += h[j] / c[j]
+        r2 += (h[j] / c[j]) ** 2
+    power_n = n_active + 2
+    s0 = s1 = s2 = 0.0
+    for corner in range(1 << n_active):
+        level = bound
+        hv = 0.0
+        parity = 0
+        for a in range(n_active):
+            if (corner >> a) & 1:
+                level -= c[active[a]]
+                hv += h[active[a]]
+                parity += 1
+        if level <= 0.0:
+            continue
+        sign = -1.0 if parity % 2 else 1.0
+        power = 1.0
+        for _ in range(n_active):
+            power *= level  # level**n
+        s0 += sign * power * level * level
+        s1 += sign * hv * power * level
+        s2 += sign * hv * hv * power
+    # S = s0, S' = -N s1, S'' = N (N - 1) s2 with N = n + 2; / (prod c (n + 2)!) = / (scale (n+1)(n+2))
+    total = power_n * (power_n - 1) * s2 + 2.0 * r1 * power_n * s1 + (r1 * r1 + r2) * s0
+    return total / (scale * (n_active + 1) * (n_active + 2))
+
+
+@kernels.inline_jit
+def _one_plane_variance(a, gradient, direction, cut, slopes, active, frame):
+    """The variance of ``direction . u`` (cell units of ``u``) over the part :func:`_one_plane`
+    just put in ``cut`` (its fraction and centroid in ``u``; ``slopes`` the plane's,
+    ``|gradient| / |a|``): ``cube & {a + gradient . u >= 0}``. Exact (to rounding), from the node
+    side's second moment in :func:`plane_cut`'s frame (:func:`_node_side_square`); for ``a < 0``
+    the part is the complement of the node side, its moments the cube's less the node side's.
+    ``active``, ``frame`` (d,) scratch."""
+    d = gradient.shape[0]
+    n_active = 0
+    free = 0.0  # inactive axes: uniform over the cell, independent of the rest
+    for j in range(d):
+        # plane_cut's u' (positive towards the plane) is sigma u: sigma = -sign(g) for a > 0
+        # (the node side is the part), +sign(g) for a < 0 (the part is the far side)
+        sigma = -1.0 if (gradient[j] > 0.0) == (a > 0.0) else 1.0
+        frame[j] = sigma * direction[j]  # h'_j, h . u = h' . u'
+        if slopes[j] > 0.0:
+            active[n_active] = j
+            n_active += 1
+        else:
+            free += direction[j] * direction[j] / 12.0
+    if n_active == 0:
+        return free
+    half = 0.0  # h' . (1/2, ...): w = u' + 1/2
+    cube = 0.0  # integral over the cube of (h' . u')^2
+    for k in range(n_active):
+        half += 0.5 * frame[active[k]]
+        cube += frame[active[k]] ** 2 / 12.0
+    square_w = _node_side_square(slopes, frame, active, n_active)  # integral over the node side
+    if a > 0.0:
+        volume = cut[0]
+        if volume <= 0.0:
+            return free
+        mean_u = 0.0  # E[h' . u'] = E[h . u] over the part
+        for k in range(n_active):
+            j = active[k]
+            mean_u += direction[j] * cut[j + 1]
+        mean_w = mean_u + half
+        return max(square_w / volume - mean_w * mean_w, 0.0) + free
+    rest = cut[0]
+    node = 1.0 - rest
+    # the part's centroid c (in u) is -node m / rest, m the node side's centroid: E_node[h . u]
+    mean_part = 0.0
+    for k in range(n_active):
+        j = active[k]
+        mean_part += direction[j] * cut[j + 1]
+    node_mean_u = -rest * mean_part / node  # E_node[h' . u']
+    node_square_u = square_w - 2.0 * half * (node_mean_u + half) * node + half * half * node
+    part_square = (cube - node_square_u) / rest
+    return max(part_square - mean_part * mean_part, 0.0) + free
+
+
 @kernels.jit
-def _clipped_cells(level, gradient, fraction, centroid):
-    """Fill ``fraction`` (M,) and ``centroid`` (M, d) of the cells (see :func:`clipped_cell`).
+def _clipped_cells(level, gradient, direction, fraction, centroid, variance):
+    """Fill ``fraction`` (M,), ``centroid`` (M, d) and ``variance`` (M,: of ``direction . u``) of
+    the cells (see :func:`clipped_cell_moments`).
 
     Per cell one pass over the margins sorts them into those that miss it (or are not modelled:
     a non-finite level or slope), those that cut it, and one that leaves nothing of it (the cell
@@ -308,7 +436,11 @@ def _clipped_cells(level, gradient, fraction, centroid):
     one_cut = np.empty(d + 1)
     one_active = np.empty(d, dtype=np.int64)
     one_moment = np.empty(d)
+    one_frame = np.empty(d)
+    h = np.empty(d)  # the cell's direction, a non-finite entry as 0 (a margin not modelled there)
     for cell in range(m):
+        for j in range(d):
+            h[j] = direction[cell, j] if np.isfinite(direction[cell, j]) else 0.0
         empty = False
         n_cut = 0
         for k in range(n_margins):
@@ -332,8 +464,11 @@ def _clipped_cells(level, gradient, fraction, centroid):
             n_cut += 1
         if empty or n_cut == 0:
             fraction[cell] = 0.0 if empty else 1.0
+            spread = 0.0
             for j in range(d):
                 centroid[cell, j] = 0.0
+                spread += h[j] ** 2 / 12.0
+            variance[cell] = 0.0 if empty else spread
             continue
         if n_cut == 1 and _one_plane(
             level[cell, cutting[0]], gradient[cell, cutting[0]], one, one_cut, one_active, one_moment
@@ -341,6 +476,15 @@ def _clipped_cells(level, gradient, fraction, centroid):
             fraction[cell] = one_cut[0]
             for j in range(d):
                 centroid[cell, j] = one_cut[j + 1]
+            variance[cell] = _one_plane_variance(
+                level[cell, cutting[0]],
+                gradient[cell, cutting[0]],
+                h,
+                one_cut,
+                one,
+                one_active,
+                one_frame,
+            )
             continue
         n_faces = 6
         faces[:6, :4, :] = cube
@@ -354,6 +498,7 @@ def _clipped_cells(level, gradient, fraction, centroid):
                 break
         if n_faces == 0:
             fraction[cell] = 0.0
+            variance[cell] = 0.0
             for j in range(d):
                 centroid[cell, j] = 0.0
             continue
@@ -369,8 +514,16 @@ def _clipped_cells(level, gradient, fraction, centroid):
         r0, r1, r2 = r0 / total, r1 / total, r2 / total
         volume = 0.0
         s0 = s1 = s2 = 0.0
+        # the function h . x (x from the inside point; h = direction, 0 beyond d): its first and
+        # second moments over each tetrahedron (0, a, b, c): V (ha + hb + hc) / 4 and
+        # V (ha^2 + hb^2 + hc^2 + (ha + hb + hc)^2) / 20
+        h0 = h[0]
+        h1 = h[1] if d > 1 else 0.0
+        h2 = h[2] if d > 2 else 0.0
+        first = second = 0.0
         for f in range(n_faces):
             a0, a1, a2 = faces[f, 0, 0] - r0, faces[f, 0, 1] - r1, faces[f, 0, 2] - r2
+            ha = h0 * a0 + h1 * a1 + h2 * a2
             for i in range(1, counts[f] - 1):
                 b0, b1, b2 = faces[f, i, 0] - r0, faces[f, i, 1] - r1, faces[f, i, 2] - r2
                 c0, c1, c2 = faces[f, i + 1, 0] - r0, faces[f, i + 1, 1] - r1, faces[f, i + 1, 2] - r2
@@ -379,7 +532,16 @@ def _clipped_cells(level, gradient, fraction, centroid):
                 s0 += v * (a0 + b0 + c0) / 4.0
                 s1 += v * (a1 + b1 + c1) / 4.0
                 s2 += v * (a2 + b2 + c2) / 4.0
+                hb = h0 * b0 + h1 * b1 + h2 * b2
+                hc = h0 * c0 + h1 * c1 + h2 * c2
+                first += v * (ha + hb + hc) / 4.0
+                second += v * (ha * ha + hb * hb + hc * hc + (ha + hb + hc) ** 2) / 20.0
         fraction[cell] = min(volume, 1.0)
+        if volume > 0.0:
+            mean = first / volume
+            variance[cell] = max(second / volume - mean * mean, 0.0)
+        else:
+            variance[cell] = 0.0
         if volume > 0.0:
             moment = (s0, s1, s2)
             shift = (r0, r1, r2)
@@ -392,7 +554,8 @@ def _clipped_cells(level, gradient, fraction, centroid):
 
 def clipped_cell(level: np.ndarray, gradient: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Volume fraction and centroid of ``{u in [-1/2, 1/2]^d : level_k + gradient_k . u >= 0
-    for every margin k}``: the inside part of a grid cell under linear margins.
+    for every margin k}``: the inside part of a grid cell under linear margins
+    (:func:`clipped_cell_moments` without a variance).
 
     Parameters
     ----------
@@ -415,8 +578,45 @@ def clipped_cell(level: np.ndarray, gradient: np.ndarray) -> tuple[np.ndarray, n
     ValueError
         If the shapes do not match or d is not 1, 2 or 3.
     """
+    fraction, centroid, _ = clipped_cell_moments(
+        level, gradient, np.zeros(np.shape(gradient)[:1] + np.shape(gradient)[2:])
+    )
+    return fraction, centroid
+
+
+def clipped_cell_moments(
+    level: np.ndarray, gradient: np.ndarray, direction: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`clipped_cell`, and the variance over each part of the linear function
+    ``direction . u``: its second central moment, exact (to rounding) on every path (the whole
+    cell ``sum h_j^2 / 12``; one cutting margin in closed form, :func:`_node_side_square`; the
+    clipped polytope from its tetrahedra), so that it moves continuously where a cell passes from
+    one path to another.
+
+    Parameters
+    ----------
+    level, gradient : ndarray
+        As :func:`clipped_cell`.
+    direction : ndarray, shape (M, d)
+        The function's change per cell width along each axis, in its own unit (the dexterity
+        margin's gradient for :mod:`kinematics.margin_cells`); a non-finite entry counts as 0.
+
+    Returns
+    -------
+    fraction, centroid : ndarray
+        As :func:`clipped_cell` (the same numbers).
+    variance : ndarray, shape (M,)
+        ``E[(h . u)^2] - E[h . u]^2`` over the part, the function's unit squared (0 where the part
+        is empty).
+
+    Raises
+    ------
+    ValueError
+        If the shapes do not match or d is not 1, 2 or 3.
+    """
     level = np.ascontiguousarray(level, dtype=float)
     gradient = np.ascontiguousarray(gradient, dtype=float)
+    direction = np.ascontiguousarray(direction, dtype=float)
     if level.ndim != 2 or gradient.ndim != 3 or gradient.shape[:2] != level.shape:
         raise ValueError(
             f"clipped_cell: level must be (M, K) and gradient (M, K, d); got {level.shape} and {gradient.shape}"
@@ -424,7 +624,10 @@ def clipped_cell(level: np.ndarray, gradient: np.ndarray) -> tuple[np.ndarray, n
     d = gradient.shape[2]
     if d not in (1, 2, 3):
         raise ValueError(f"clipped_cell: the cell has d = {d} axes; allowed 1, 2 or 3")
+    if direction.shape != (level.shape[0], d):
+        raise ValueError(f"clipped_cell: direction must be (M, d) = {(level.shape[0], d)}; got {direction.shape}")
     fraction = np.empty(level.shape[0])
     centroid = np.empty((level.shape[0], d))
-    _clipped_cells(level, gradient, fraction, centroid)
-    return fraction, centroid
+    variance = np.empty(level.shape[0])
+    _clipped_cells(level, gradient, direction, fraction, centroid, variance)
+    return fraction, centroid, variance

@@ -174,8 +174,9 @@ class Tricept(Mechanism):
     )
     default_nodes = 32**3
     # linear margins at 20^3 nodes: V, GDI and eta within 0.1 % on the ladder's and the scan's designs
-    # of docs/accuracy.md and 12 more random ones (at most 0.089 %, the GDI of a scan design; at 19^3
-    # and 18^3 the GDI misses on 8 and 5 of the 16: 0.117 %, 0.124 %); one plane per cell needed
+    # of docs/accuracy.md and 12 more random ones (at most 0.082 %, the V of one; the GDI 0.05 %
+    # with the parts' means of 1/kappa, 0.089 % at their centroids; at 19^3 and 18^3 too, V 0.090 %
+    # and 0.089 %, not adopted: it would move tricept_max_volume's objective); one plane per cell needed
     # 28^3 and missed a scan design. Continuous where a slab thinner than a cell empties (the
     # planes stepped there, along b)
     cell_rule = "margins"

@@ -686,14 +686,46 @@ def test_the_linear_margins_whole_volume_is_measured_against_the_reference():
     assert abs(linear_v) < 0.06 and abs(linear_gdi) < 0.2
 
 
+def test_a_part_s_inverse_condition_is_the_mean_of_its_model_over_the_part():
+    """The linear-margins rule's 1/kappa of a band part (kinematics.margin_cells.part_inverse_condition
+    with the part's moments from kinematics.polytope.clipped_cell_moments) is the mean over the part
+    of ``sqrt(dexterity margin + limit^2)`` to second order in the margin's spread, against a 60^3
+    midpoint rule of the same model: on cells cut by a reach margin and by the dexterity margin
+    itself, and a whole cell, with ``Var / E^2`` from 0.03 to 0.33 (the Tricept's cells: about
+    0.01), it takes away at least 70 % of the centroid's bias (the rule before: measured 73 % at
+    0.33, 85-93 % below);
+    where the margin reaches 0 in the part with no limit, it stays between Hoelder's lower bound
+    and Jensen's upper one."""
+    from kinematics import margin_cells
+    from kinematics.polytope import clipped_cell_moments
+
+    g = (np.arange(60) + 0.5) / 60 - 0.5
+    u = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
+    cases = [  # (levels: reach, dexterity; gradients; the limit)
+        (np.array([0.1, 0.01]), np.array([[1.0, 0.3, -0.2], [0.03, 0.04, 0.01]]), 0.1),
+        (np.array([0.1, 0.05]), np.array([[1.0, 0.3, -0.2], [0.03, 0.04, 0.01]]), 0.1),
+        (np.array([0.4, 0.02]), np.array([[0.1, 0.1, 0.1], [0.02, -0.03, 0.02]]), 0.05),
+        (np.array([0.4, 0.02]), np.array([[0.1, 0.1, 0.1], [0.04, 0.0, 0.0]]), 0.0),
+    ]
+    for level, gradient, limit in cases:
+        at, slope = level[None], gradient[None]
+        fraction, centroid, variance = clipped_cell_moments(at, slope, slope[:, -1, :])
+        value = margin_cells.part_inverse_condition(at, slope, centroid, variance, np.zeros(1), limit)[0]
+        m = level + u @ gradient.T
+        x = m[(m >= 0).all(axis=1), 1] + limit**2
+        exact, centre = np.sqrt(x).mean(), np.sqrt(x.mean())
+        assert abs(value - exact) < 0.3 * abs(centre - exact)
+        assert centre / np.sqrt(1 + x.var() / x.mean() ** 2) < value < centre
+
+
 def test_the_part_means_replacement_is_the_linear_model_s_mean_over_the_part():
-    """``python -m benchmarks.part_means``: its 1/kappa of a band part is the mean of
+    """``python -m benchmarks.part_means``: its 1/kappa of a band part is the Monte Carlo mean of
     ``sqrt(dexterity margin + limit^2)`` over the part of the cell where every linear margin holds
-    (here a reach margin and the dexterity margin cut one cell; against a 60^3 midpoint rule of the
-    same model), the centroid's value where the part holds too few points, and the fallback where
-    the cell has no dexterity model (as the code's)."""
+    (against a 60^3 midpoint rule of the same model), the code's value where the part holds too
+    few points, and the fallback where the cell has no dexterity model (as the code's)."""
     from benchmarks.part_means import monte_carlo_part_means
     from kinematics import margin_cells
+    from kinematics.polytope import clipped_cell_moments
 
     min_ic = 0.1
     at = np.array([[0.1, 0.004], [-0.4995, 0.01], [0.2, np.nan]])
@@ -704,30 +736,28 @@ def test_the_part_means_replacement_is_the_linear_model_s_mean_over_the_part():
             [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],  # no dexterity model: the fallback
         ]
     )
-    centroid = np.array([[0.1, 0.0, 0.0], [0.49975, 0.0, 0.0], [0.0, 0.0, 0.0]])
     fallback = np.array([-1.0, -1.0, 0.123])
-    code = margin_cells.part_inverse_condition(at, slope, centroid, fallback, min_ic)
-    mean = monte_carlo_part_means(20_000)(at, slope, centroid, fallback, min_ic)
+    _, centroid, variance = clipped_cell_moments(at, slope, np.nan_to_num(slope[:, -1, :]))
+    code = margin_cells.part_inverse_condition(at, slope, centroid, variance, fallback, min_ic)
+    mean = monte_carlo_part_means(20_000)(at, slope, centroid, variance, fallback, min_ic)
     g = (np.arange(60) + 0.5) / 60 - 0.5
     u = np.stack(np.meshgrid(g, g, g, indexing="ij"), axis=-1).reshape(-1, 3)
     m = at[0] + u @ slope[0].T
-    part = (m >= 0).all(axis=1)
-    exact = np.sqrt(m[part, 1] + min_ic**2).mean()
+    exact = np.sqrt(m[(m >= 0).all(axis=1), 1] + min_ic**2).mean()
     assert mean[0] == pytest.approx(exact, rel=2e-3)
-    assert abs(mean[0] - code[0]) > 10 * abs(mean[0] - exact)  # the centroid's value is not the mean
     assert mean[1] == code[1] and mean[2] == code[2] == 0.123
 
 
-def test_the_part_means_leave_v_and_lower_the_tricept_s_gdi_bias():
+def test_the_part_means_leave_v_and_agree_with_the_tricept_s_rule():
     """``python -m benchmarks.part_means tricept``: V is the code's to the bit (only the parts'
-    1/kappa changes), and the mean over each part takes the GDI's positive bias down (the
-    Tricept's paper design at its default: +0.060 % at the centroid, +0.030 % with the means,
-    4,000 points a cell; here 500), the concavity of 1/kappa along its margin."""
+    1/kappa changes), and the code's GDI (the parts' means from their moments) is the Monte Carlo
+    mean's within its noise (the Tricept's paper design at its default: +0.037 % against the
+    reference, where the centroid's values erred by +0.060 %; here 500 points a cell)."""
     from benchmarks.part_means import errors
     from kinematics import margin_cells
 
-    centroid_values = margin_cells.part_inverse_condition
+    rule = margin_cells.part_inverse_condition
     ((code, mean),) = errors(get_mechanism("tricept", **PAPER_DESIGNS["tricept"]), [None], points=500)
-    assert margin_cells.part_inverse_condition is centroid_values  # restored
+    assert margin_cells.part_inverse_condition is rule  # restored
     assert mean[0] == code[0]
-    assert 0.0004 < code[1] < 0.0008 and 0.0 < mean[1] < 0.7 * code[1]
+    assert 0.0002 < code[1] < 0.0005 and abs(mean[1] - code[1]) < 0.00005
