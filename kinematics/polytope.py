@@ -39,15 +39,14 @@ from kinematics import kernels
 
 
 @kernels.inline_jit
-def prism_plane_cut(c, fraction_centroid, active, n_active):
-    """:func:`kinematics.workspace._prism_cut` of one cell (the same operations) into
-    ``fraction_centroid`` (d + 1,), the axes of non-zero slope ``active[:n_active]``; False
-    (nothing written) where the plane does not cross every edge along its steepest axis."""
+def _steepest_axis(c, active, n_active):
+    """The active axis of largest slope ``c`` (the first of equals), and the sum of the other
+    active slopes and of their squares: the prism form holds where ``c[top] >= 2 + others``
+    (the plane crosses every edge along that axis)."""
     top_axis = active[0]
     for a in range(1, n_active):
         if c[active[a]] > c[top_axis]:
             top_axis = active[a]
-    top = c[top_axis]
     others = 0.0
     squares = 0.0
     for a in range(n_active):
@@ -55,6 +54,16 @@ def prism_plane_cut(c, fraction_centroid, active, n_active):
         if j != top_axis:
             others += c[j]
             squares += c[j] * c[j]
+    return top_axis, others, squares
+
+
+@kernels.inline_jit
+def prism_plane_cut(c, fraction_centroid, active, n_active):
+    """:func:`kinematics.workspace._prism_cut` of one cell (the same operations) into
+    ``fraction_centroid`` (d + 1,), the axes of non-zero slope ``active[:n_active]``; False
+    (nothing written) where the plane does not cross every edge along its steepest axis."""
+    top_axis, others, squares = _steepest_axis(c, active, n_active)
+    top = c[top_axis]
     if not top >= 2.0 + others:
         return False
     volume = 0.5 + 1.0 / top
@@ -290,16 +299,8 @@ def _node_side_square(c, h, active, n_active):
     is the region under a linear height ``tau`` over the others, and the integral the moments of
     linear functions over a box) or inclusion-exclusion, ``(1/2) d^2/dt^2`` of
     ``int (B - (c + t h) . w)_+^2 dw = 2 sum_v (-1)^|v| (B - c . v)_+^(n+2) / ((n+2)! prod c)``."""
-    top_axis = active[0]
-    for a in range(1, n_active):
-        if c[active[a]] > c[top_axis]:
-            top_axis = active[a]
+    top_axis, others, _ = _steepest_axis(c, active, n_active)
     top = c[top_axis]
-    others = 0.0
-    for a in range(n_active):
-        j = active[a]
-        if j != top_axis:
-            others += c[j]
     if top >= 2.0 + others:
         # x = w - 1/2 over the base, uniform: E[x] = 0, E[x^2] = 1/12, odd moments 0
         tau = 1.0 / top + 0.5
