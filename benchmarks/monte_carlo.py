@@ -210,6 +210,8 @@ def main() -> None:
         parser.error(f"--points must be a power of 2 (Sobol's balance); got {args.points}")
     if args.replicates < 2:
         parser.error(f"--replicates must be >= 2; got {args.replicates}")
+    if not args.markdown.parent.is_dir():
+        parser.error(f"--markdown: no folder {args.markdown.parent} to write the page in")
     for option in ("only", "scan"):
         unknown = set(getattr(args, option) or ()) - set(PAPER)
         if unknown:

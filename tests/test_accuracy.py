@@ -777,3 +777,27 @@ def test_the_objective_agrees_with_a_pointwise_monte_carlo_of_the_pose_box(name)
         assert abs(row[f"{quantity}_diff"]) <= 2 * row[f"{quantity}_ci"] + 1e-3, (quantity, row)
     with pytest.raises(ValueError, match="replicates must be >= 2"):
         monte_carlo(get_mechanism(name, **PAPER_DESIGNS[name]), 2**10, 1)
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--points", "100"], "--points must be a power of 2"),
+        (["--replicates", "1"], "--replicates must be >= 2"),
+        (["--only", "hexapod"], "--only: unknown mechanisms ['hexapod']"),
+        (["--scan", "hexapod"], "--scan: unknown mechanisms ['hexapod']"),
+        (["--markdown", "no/such/folder/page.md"], "--markdown: no folder no/such/folder"),
+    ],
+)
+def test_the_monte_carlo_benchmark_rejects_bad_options_before_sampling(argv, message, monkeypatch, capsys, tmp_path):
+    """One line naming the option and what is allowed, exit status 2, nothing sampled or written."""
+    from benchmarks import monte_carlo
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr("sys.argv", ["monte_carlo", *argv])
+    monkeypatch.setattr(monte_carlo, "compare", lambda *a, **k: pytest.fail("sampled before checking"))
+    with pytest.raises(SystemExit) as exit_:
+        monte_carlo.main()
+    assert exit_.value.code == 2
+    assert message in capsys.readouterr().err.splitlines()[-1]
+    assert list(tmp_path.iterdir()) == []
