@@ -763,20 +763,63 @@ def test_the_part_means_leave_v_and_agree_with_the_tricept_s_rule():
     assert 0.0002 < code[1] < 0.0005 and abs(mean[1] - code[1]) < 0.00005
 
 
-@pytest.mark.parametrize("name", ["rpr2", "tricept", "h4", "gough_stewart"])
+@pytest.mark.parametrize("name", ["rpr2", "tricept", "h4", "gough_stewart", "delta"])
 def test_the_objective_agrees_with_a_pointwise_monte_carlo_of_the_pose_box(name):
     """``python -m benchmarks.monte_carlo`` (docs/monte_carlo.md): V and GDI at the defaults
     against randomised QMC over the whole pose box, each point tested by ``membership`` alone (no
     grid, no crossing, no occupied box), at a small sample: within twice the replicates' interval
     plus 0.1 %. Covers the measure (H4's exact axis in cm, the Tricept's angles in rad, the
     Gough-Stewart's constant-orientation axes held, not measured): a factor in V's units fails it."""
-    from benchmarks.monte_carlo import compare, monte_carlo
+    from benchmarks.monte_carlo import compare
 
     row = compare(get_mechanism(name, **PAPER_DESIGNS[name]), 2**17, 4, reference=False)
     for quantity in ("volume", "gdi"):
         assert abs(row[f"{quantity}_diff"]) <= 2 * row[f"{quantity}_ci"] + 1e-3, (quantity, row)
+
+
+def test_the_monte_carlo_needs_two_replicates_for_its_interval():
+    from benchmarks.monte_carlo import monte_carlo
+
     with pytest.raises(ValueError, match="replicates must be >= 2"):
-        monte_carlo(get_mechanism(name, **PAPER_DESIGNS[name]), 2**10, 1)
+        monte_carlo(get_mechanism("rpr2", **PAPER_DESIGNS["rpr2"]), 2**10, 1)
+
+
+def test_the_monte_carlo_page_says_n_a_where_a_figure_does_not_exist():
+    """An empty workspace (V and GDI of 0 and NaN) and rows without the accuracy page's reference
+    (``compare(..., reference=False)``) give "n/a" cells, not a ZeroDivisionError or a KeyError;
+    the headline's maxima and counts skip them."""
+    from benchmarks.monte_carlo import page
+
+    empty = {"seconds": 1.0, "volume": 0.0, "volume_half": 0.0, "gdi": math.nan, "gdi_half": math.nan}
+    for quantity in ("volume", "gdi"):
+        empty |= {
+            f"code_{quantity}": 0.0,
+            f"code_{quantity}_bar": 0.0,
+            f"{quantity}_diff": math.nan,
+            f"{quantity}_ci": math.nan,
+        }
+    fine = {
+        "seconds": 2.0,
+        "volume": 10.0,
+        "volume_half": 0.01,
+        "gdi": 0.5,
+        "gdi_half": 0.0005,
+        "code_volume": 10.005,
+        "code_volume_bar": 0.002,
+        "volume_diff": 5e-4,
+        "volume_ci": 1e-3,
+        "code_gdi": 0.5,
+        "code_gdi_bar": 0.0,
+        "gdi_diff": 0.0,
+        "gdi_ci": 1e-3,
+    }
+    text = page([("rpr2", "empty", empty), ("rpr2", "fine", fine)], 2**10, 2)
+    prose = " ".join(text.split())
+    assert "the largest difference 0.050%" in prose and "on 1 of 4 quantities" in prose
+    assert "exceeds twice the interval on 0 of them" in prose and "largest difference n/a." in prose
+    rows = [line.split(" | ") for line in text.splitlines() if line.startswith("| rpr2 |")]
+    assert rows[0][3:6] == ["n/a"] * 3 and rows[0][7:12] == ["n/a"] * 3 + ["n/a / n/a"] * 2
+    assert rows[1][3:6] == ["+0.050%", "±0.100%", "0.5"] and rows[1][11] == "n/a / n/a"
 
 
 @pytest.mark.parametrize(
@@ -787,6 +830,7 @@ def test_the_objective_agrees_with_a_pointwise_monte_carlo_of_the_pose_box(name)
         (["--only", "hexapod"], "--only: unknown mechanisms ['hexapod']"),
         (["--scan", "hexapod"], "--scan: unknown mechanisms ['hexapod']"),
         (["--markdown", "no/such/folder/page.md"], "--markdown: no folder no/such/folder"),
+        (["--markdown", "."], "--markdown: . is a folder"),
     ],
 )
 def test_the_monte_carlo_benchmark_rejects_bad_options_before_sampling(argv, message, monkeypatch, capsys, tmp_path):
