@@ -31,6 +31,14 @@ two constraint surfaces meet, and a slab between two of them, keep their shape, 
 per node cannot (docs/accuracy.md, "Order"). A last row gives the exact part of each cut cell
 under that rule (:func:`kinematics.polytope.clipped_cell`) against the same points.
 
+``--repairs`` measures two repairs of the planes rule on the captured grid, each exact on its
+model (:func:`rule_repairs`), against the 4x reference: **slab cells by two planes** (the plane
+through the nearest crossings and the axis plane through the farther crossing of each axis whose
+farther crossing lies inside the cell) and **corner cells by linear margins** (the uncut cells
+with a node of the other membership among their neighbours, each counted by the linear margins at
+its own node, :func:`linear_margins`, instead of 0 or 1). A diagnosis of the Delta's scan miss
+(docs/accuracy.md): neither repair is in ``evaluate``.
+
 ``--volume [RESOLUTION ...]`` measures the rule over the whole grid instead, at the default and at
 the given resolutions, against the 4x reference of ``benchmarks.accuracy`` (no Monte Carlo):
 the code's V and GDI errors, the linear margins' (:func:`volume_errors`), and their V without
@@ -205,6 +213,67 @@ def candidate(mech, points: int = 200, seed: int = 1) -> list[tuple[str, float, 
     return rows
 
 
+def _mixed_uncut_nodes(seen: dict, cut: np.ndarray) -> np.ndarray:
+    """The nodes (flat indices) with no cut edge but a node of the other membership among their
+    3^d - 1 neighbours: the cells whose corner the boundary may cross unseen by the crossings."""
+    membership = seen["inside"].astype(np.uint8)
+    mixed = maximum_filter(membership, size=3, mode="nearest") != minimum_filter(membership, size=3, mode="nearest")
+    return np.setdiff1d(np.nonzero(mixed.ravel())[0], cut)
+
+
+def slab_parts(seen: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The slab cells of the captured grid (inside nodes whose farther crossing along some axis
+    lies within the cell, flat indices (S,)) and two exact parts of each (fractions of a cell,
+    (S,)): under the plane through the nearest crossings alone (the planes rule without its
+    fading), and under that plane and, per such axis, the axis plane through the farther
+    crossing (the workspace's other side of the slab)."""
+    near, far, cut = _cut_nodes(seen)
+    d = near.shape[0]
+    toward = np.stack([np.where(plus <= minus, 1.0, -1.0) for minus, plus, _, _ in seen["crossings"]])
+    toward = toward.reshape(near.shape)
+    slab = cut[seen["inside"].ravel()[cut] & (far[:, cut] < 0.5).any(axis=0)]
+    # the node's side of the plane: 1 - sum_k toward_k u_k / near_k >= 0 (u in cell units)
+    gradient = np.where(np.isfinite(near[:, slab]), -toward[:, slab] / np.maximum(near[:, slab], 1e-12), 0.0).T
+    level = np.ones((slab.size, 1))
+    one_plane, _ = clipped_cell(level, gradient[:, None, :])
+    # the farther crossing lies on the side opposite the nearer: toward_k u_k <= far_k there
+    within = far[:, slab].T < 0.5
+    far_level = np.where(within, far[:, slab].T, np.nan)
+    far_gradient = np.where(within[:, :, None], np.eye(d)[None] * toward[:, slab].T[:, :, None], np.nan)
+    two_planes, _ = clipped_cell(
+        np.concatenate([level, far_level], axis=1), np.concatenate([gradient[:, None, :], far_gradient], axis=1)
+    )
+    return slab, one_plane, two_planes
+
+
+def rule_repairs(mech, reference: bool = True) -> dict[str, float]:
+    """The two repairs of ``--repairs`` on ``mech`` at its default resolution, in % of V:
+    ``slab`` (two planes minus one, over the slab cells; <= 0), ``corner_outside`` and
+    ``corner_inside`` (linear margins minus the node's own count, 0 or 1, over the corner cells
+    of each kind), and with ``reference`` the code's V error against the 4x reference
+    (``code``, as ``benchmarks.accuracy``'s scan) and with the repairs (``repaired``)."""
+    seen = _captured_grid(mech)
+    _, _, cut = _cut_nodes(seen)
+    cells = float(seen["sums"][0])
+    _, one_plane, two_planes = slab_parts(seen)
+    corner = _mixed_uncut_nodes(seen, cut)
+    is_in = seen["inside"].ravel()[corner]
+    fraction, _ = clipped_cell(*linear_margins(seen, corner))
+    change = fraction - is_in
+    out = {
+        "slab": 100 * float((two_planes - one_plane).sum()) / cells,
+        "corner_outside": 100 * float(change[~is_in].sum()) / cells,
+        "corner_inside": 100 * float(change[is_in].sum()) / cells,
+    }
+    if reference:
+        r0 = max(ws.default_resolution(mech, method=method) for method in METHODS)
+        ref = ws.evaluate(mech, resolution=REFERENCE_FACTOR * r0, method=reference_method(mech), error_estimate=False)
+        ratio = seen["evaluation"].volume / ref.volume
+        out["code"] = 100 * (ratio - 1)
+        out["repaired"] = out["code"] + ratio * (out["slab"] + out["corner_outside"] + out["corner_inside"])
+    return out
+
+
 def volume_errors(mech, resolutions: list[int | None]) -> list[tuple]:
     """Rows ``(resolution, nodes, code's V, GDI errors, linear margins' V, GDI errors, V error
     without the crossings' secants)`` in % of the reference (the code at
@@ -251,9 +320,7 @@ def breakdown(mech, points: int = 400, seed: int = 1) -> list[tuple[str, int, fl
     diff = counted - sampled_fraction
     slab = (far[:, cut] < 0.5).any(axis=0)
     axes_cut = (seen["slopes"] > 0.0).sum(axis=1)
-    membership = inside.astype(np.uint8)
-    mixed = maximum_filter(membership, size=3, mode="nearest") != minimum_filter(membership, size=3, mode="nearest")
-    uncut = np.setdiff1d(np.nonzero(mixed.ravel())[0], cut)
+    uncut = _mixed_uncut_nodes(seen, cut)
     uncut_in = inside.ravel()[uncut]
     uncut_fraction = _monte_carlo_fractions(seen, uncut, points, rng)
     uncut_diff = uncut_in - uncut_fraction
@@ -290,6 +357,11 @@ def main() -> None:
     parser.add_argument("--points", type=int, default=400)
     parser.add_argument("--candidate", action="store_true", help="also measure the candidate rule (linear margins)")
     parser.add_argument(
+        "--repairs",
+        action="store_true",
+        help="the slab cells by two planes and the corner cells by linear margins, against the 4x reference",
+    )
+    parser.add_argument(
         "--volume",
         type=int,
         nargs="*",
@@ -305,6 +377,14 @@ def main() -> None:
     pool = dict(designs(args.mechanism)) | dict(random_designs(args.mechanism, SCAN_SEED, SCAN, "scan"))
     if args.design not in pool:
         parser.error(f"design={args.design!r} is invalid: allowed {', '.join(pool)}")
+    if args.repairs:
+        r = rule_repairs(pool[args.design])
+        print(
+            f"{args.mechanism}, {args.design}: V against the 4x reference {r['code']:+.3f} %; slab cells by two "
+            f"planes {r['slab']:+.3f} %, corner cells by linear margins {r['corner_outside']:+.3f} % (outside "
+            f"nodes) {r['corner_inside']:+.3f} % (inside); with both {r['repaired']:+.3f} %"
+        )
+        return
     if args.volume is not None:
         if any(r < 4 for r in args.volume):
             parser.error(f"--volume={args.volume} is invalid: allowed resolutions >= 4")
