@@ -53,13 +53,11 @@ import numpy as np
 from scipy.ndimage import maximum_filter, minimum_filter
 
 from benchmarks.accuracy import (
-    METHODS,
-    REFERENCE_FACTOR,
     SCAN,
     SCAN_SEED,
     designs,
     random_designs,
-    reference_method,
+    reference_evaluation,
 )
 from kinematics import MECHANISMS, kernels, margin_cells
 from kinematics import workspace as ws
@@ -128,6 +126,13 @@ def _cut_nodes(seen: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return near, far, np.nonzero(np.isfinite(near).any(axis=0))[0]
 
 
+def _toward(seen: dict) -> np.ndarray:
+    """The direction (d, nodes; +1 up, -1 down) of each node's nearest crossing along each
+    sampled axis, as :func:`_cut_nodes` orders its distances (a tie: up)."""
+    toward = np.stack([np.where(plus <= minus, 1.0, -1.0) for minus, plus, _, _ in seen["crossings"]])
+    return toward.reshape(len(seen["sampled"]), -1)
+
+
 def _monte_carlo_fractions(seen: dict, nodes: np.ndarray, points: int, rng: np.random.Generator) -> np.ndarray:
     """Fraction (M,) of the cells of ``nodes`` (flat indices) inside the workspace, from
     ``points`` uniform random points each (:func:`_cell_points`)."""
@@ -181,8 +186,7 @@ def candidate(mech, points: int = 200, seed: int = 1) -> list[tuple[str, float, 
     margins" on those points (these two rows differ without sampling noise)."""
     seen = _captured_grid(mech)
     near, _, cut = _cut_nodes(seen)
-    toward = np.stack([np.where(plus <= minus, 1.0, -1.0) for minus, plus, _, _ in seen["crossings"]])
-    toward = toward.reshape(near.shape)
+    toward = _toward(seen)
     is_in = seen["inside"].ravel()[cut]
     offsets, member = _cell_points(seen, cut, points, np.random.default_rng(seed))
     truth = member.mean(axis=1)
@@ -229,8 +233,7 @@ def slab_parts(seen: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     crossing (the workspace's other side of the slab)."""
     near, far, cut = _cut_nodes(seen)
     d = near.shape[0]
-    toward = np.stack([np.where(plus <= minus, 1.0, -1.0) for minus, plus, _, _ in seen["crossings"]])
-    toward = toward.reshape(near.shape)
+    toward = _toward(seen)
     slab = cut[seen["inside"].ravel()[cut] & (far[:, cut] < 0.5).any(axis=0)]
     # the node's side of the plane: 1 - sum_k toward_k u_k / near_k >= 0 (u in cell units)
     gradient = np.where(np.isfinite(near[:, slab]), -toward[:, slab] / np.maximum(near[:, slab], 1e-12), 0.0).T
@@ -266,9 +269,7 @@ def rule_repairs(mech, reference: bool = True) -> dict[str, float]:
         "corner_inside": 100 * float(change[is_in].sum()) / cells,
     }
     if reference:
-        r0 = max(ws.default_resolution(mech, method=method) for method in METHODS)
-        ref = ws.evaluate(mech, resolution=REFERENCE_FACTOR * r0, method=reference_method(mech), error_estimate=False)
-        ratio = seen["evaluation"].volume / ref.volume
+        ratio = seen["evaluation"].volume / reference_evaluation(mech).volume
         out["code"] = 100 * (ratio - 1)
         out["repaired"] = out["code"] + ratio * (out["slab"] + out["corner_outside"] + out["corner_inside"])
     return out
@@ -281,8 +282,7 @@ def volume_errors(mech, resolutions: list[int | None]) -> list[tuple]:
     ``benchmarks.accuracy``). The linear margins' are ``evaluate(method="margins")``'s (the
     whole grid: :mod:`kinematics.margin_cells`); without the secants, its V from the nodes'
     margins alone. No Monte Carlo: the errors are the rules' own."""
-    r0 = max(ws.default_resolution(mech, method=method) for method in METHODS)  # as benchmarks.accuracy's scan
-    reference = ws.evaluate(mech, resolution=REFERENCE_FACTOR * r0, method=reference_method(mech), error_estimate=False)
+    reference = reference_evaluation(mech)  # as benchmarks.accuracy's scan
     rows = []
     for resolution in resolutions:
         seen = _captured_grid(mech, resolution)

@@ -163,7 +163,7 @@ def _percent(value: float | None, signed: bool = True) -> str:
 
 def _cell(row: dict, quantity: str) -> str:
     diff, ci = row[f"{quantity}_diff"], row[f"{quantity}_ci"]
-    ratio = abs(diff) / ci if math.isfinite(diff) and math.isfinite(ci) and ci > 0 else math.nan
+    ratio = _ratio(abs(diff), ci)
     interval = "n/a" if math.isnan(ci) else f"±{ci:.3%}"
     return f"{_percent(diff)} | {interval} | {'n/a' if math.isnan(ratio) else f'{ratio:.1f}'}"
 
@@ -199,8 +199,8 @@ def page(rows: list[tuple[str, str, dict]], points: int, replicates: int) -> str
         f"The code against the Monte Carlo: the largest difference {_percent(worst, signed=False)}; within",
         f"{TARGET:.1%} with the interval's confidence (difference + half-width) on {surely} of {len(quantities)}",
         f"quantities. The difference exceeds twice the interval on {resolved} of them: there it is unlikely",
-        "to be sampling noise and",
-        "estimates the code's discretisation error; elsewhere the difference plus the interval bounds it.",
+        "to be sampling noise and estimates the code's discretisation error; elsewhere the difference",
+        "plus the interval bounds it.",
         f"The reference against the Monte Carlo: the largest difference {_percent(reference, signed=False)}.",
         "",
         "| mechanism | design | V (code) | V: diff | CI | \\|diff\\| / CI | GDI (code) | GDI: diff | CI "

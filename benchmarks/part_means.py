@@ -36,17 +36,15 @@ import numpy as np
 
 from benchmarks.accuracy import (
     ERROR_TARGET,
-    METHODS,
-    REFERENCE_FACTOR,
     SCAN,
     SCAN_SEED,
     designs,
     quantities,
     random_designs,
-    reference_method,
+    reference_evaluation,
 )
 from kinematics import MECHANISMS, margin_cells
-from kinematics.workspace import default_resolution, evaluate
+from kinematics.workspace import evaluate
 
 #: cells per block of the Monte Carlo means (block x points x margins floats at once)
 BLOCK = 64
@@ -103,10 +101,7 @@ def errors(
     parts' Monte Carlo means (or ``model``), against the reference of ``benchmarks.accuracy``."""
     # the rule first: a mechanism it does not take is refused before the reference is computed
     codes = [quantities(evaluate(mech, resolution=r, method="margins", error_estimate=False)) for r in resolutions]
-    r0 = max(default_resolution(mech, method=method) for method in METHODS)
-    reference = quantities(
-        evaluate(mech, resolution=REFERENCE_FACTOR * r0, method=reference_method(mech), error_estimate=False)
-    )
+    reference = quantities(reference_evaluation(mech))
     rows = []
     for resolution, code in zip(resolutions, codes):
         code_values = margin_cells.part_inverse_condition
